@@ -1,0 +1,36 @@
+"""Exceptions raised by contactpipe. Nothing internal is imported here."""
+
+
+class ContactpipeError(Exception):
+    """Base class of every error contactpipe raises on purpose."""
+
+
+class SceneError(ContactpipeError, ValueError):
+    """A scene (or sweep/pipeline file) is invalid.
+
+    The message names the field (dotted path), the value given and what is allowed.
+    Several problems are reported together, one per line.
+    """
+
+    def __init__(self, problems):
+        if isinstance(problems, str):
+            problems = [problems]
+        self.problems = list(problems)
+        super().__init__("; ".join(self.problems) if len(self.problems) < 2
+                         else f"{len(self.problems)} problems: " + "; ".join(self.problems))
+
+
+class ConvergenceError(ContactpipeError, RuntimeError):
+    """A solver did not reach its tolerance; the message names the step and residual."""
+
+
+class GrossSlidingError(ConvergenceError):
+    """The tangential force cannot be carried in partial slip (|T| >= mu W)."""
+
+
+class GridError(ContactpipeError, RuntimeError):
+    """The contact reached the edge of the grid: the domain is too small."""
+
+
+class ArchiveError(ContactpipeError, OSError):
+    """An archive is missing, truncated, corrupt or does not follow the schema."""
