@@ -1,0 +1,246 @@
+"""Gap builders: the composite initial gap hi(x1, x2) of the two bodies.
+
+Pure functions of the 1-D cell-centre coordinates ``x1`` (N1,) and ``x2`` (N2,) [m],
+returning the gap on the grid as an array of shape (N1, N2) [m], ``gap[i, j]`` at
+``(x1[i], x2[j])``. The analytical shapes have their first contact point at the origin,
+where the gap is zero (CONTRACT §2); the gap is >= 0 everywhere.
+
+- :func:`sphere_gap`: the Hertz paraboloid r^2 / (2 R).
+- :func:`ellipsoid_gap`: x1^2 / (2 R1) + x2^2 / (2 R2).
+- :func:`flat_punch_gap`: 0 on the flat circular end, a finite step outside.
+- :func:`surface_gap`: read from a netCDF file (variable ``gap`` over ``x1``, ``x2``,
+  interpolated linearly onto the grid) or a ``.npy`` array on the grid itself.
+
+Units: metres throughout.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from .exceptions import SceneError
+
+__all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface"]
+
+#: Units a netCDF ``gap`` variable may declare (absent is read as metres).
+_METRE = ("m", "meter", "metre", "meters", "metres")
+
+
+def _axes(x1, x2):
+    """Broadcastable column / row views of the 1-D coordinates."""
+    x1 = np.asarray(x1, dtype=float).reshape(-1, 1)
+    x2 = np.asarray(x2, dtype=float).reshape(1, -1)
+    return x1, x2
+
+
+def sphere_gap(x1, x2, radius):
+    """Gap of a sphere on a flat, ``r^2 / (2 R)`` [m].
+
+    This is the paraboloid of Hertz theory rather than the exact cap
+    ``R - sqrt(R^2 - r^2)``: the two agree to O(r^4 / R^3), which is far below the
+    accuracy of the half-space approximation the method rests on (a << R), it keeps the
+    comparison with the Hertz closed forms exact, and it stays defined where r > R.
+
+    Parameters
+    ----------
+    x1, x2 : array_like, shape (N1,) and (N2,)
+        Cell-centre coordinates [m].
+    radius : float
+        Composite radius of curvature R [m] (1/R = 1/R_indenter + 1/R_halfspace).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N1, N2)
+        Initial gap [m].
+    """
+    x1, x2 = _axes(x1, x2)
+    return (x1 ** 2 + x2 ** 2) / (2.0 * radius)
+
+
+def ellipsoid_gap(x1, x2, radii):
+    """Gap of an ellipsoid on a flat, ``x1^2 / (2 R1) + x2^2 / (2 R2)`` [m].
+
+    The same paraboloid approximation as :func:`sphere_gap`, with principal radii of
+    curvature along the grid axes.
+
+    Parameters
+    ----------
+    x1, x2 : array_like, shape (N1,) and (N2,)
+        Cell-centre coordinates [m].
+    radii : (float, float)
+        Principal radii of curvature (R1 along x1, R2 along x2) [m].
+
+    Returns
+    -------
+    numpy.ndarray, shape (N1, N2)
+        Initial gap [m].
+    """
+    r1, r2 = radii
+    x1, x2 = _axes(x1, x2)
+    return x1 ** 2 / (2.0 * r1) + x2 ** 2 / (2.0 * r2)
+
+
+def flat_punch_gap(x1, x2, radius, height=None):
+    """Gap of a flat-ended cylindrical punch: 0 where r <= radius, ``height`` outside [m].
+
+    The punch is a cylinder of finite height rather than an infinitely tall one: the
+    gap outside the flat end is ``height`` (default: the radius), so no cell outside the
+    end can touch under any realistic load, while every value stays finite and an
+    archive never holds inf.
+
+    Parameters
+    ----------
+    x1, x2 : array_like, shape (N1,) and (N2,)
+        Cell-centre coordinates [m].
+    radius : float
+        Radius of the flat circular end [m].
+    height : float, optional
+        Gap outside the flat end [m]; default ``radius``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N1, N2)
+        Initial gap [m].
+    """
+    h = float(radius if height is None else height)
+    x1, x2 = _axes(x1, x2)
+    return np.where(x1 ** 2 + x2 ** 2 <= radius ** 2, 0.0, h)
+
+
+def _is_npy(path: str) -> bool:
+    return path.lower().endswith(".npy")
+
+
+def check_surface(file, x1=None, x2=None) -> list:
+    """Problems with a surface file, and with the grid when ``x1``, ``x2`` are given.
+
+    Reads headers and coordinates only (never the whole array), so it is cheap enough
+    to run on every scene validation.
+
+    Parameters
+    ----------
+    file : str or path-like
+        A netCDF file with a variable ``gap`` over dimensions ``x1``, ``x2`` [m], or a
+        ``.npy`` array of shape (N1, N2).
+    x1, x2 : array_like, optional
+        Cell-centre coordinates of the grid [m].
+
+    Returns
+    -------
+    list of str
+        One message per problem, each naming ``geometry.file`` and the file; empty
+        when the file can serve the grid.
+    """
+    path = os.fspath(file)
+    where = f"geometry.file {path!r}"
+    if not os.path.isfile(path):
+        return [f"{where}: no such file"]
+    grid = x1 is not None and x2 is not None
+    if _is_npy(path):
+        try:
+            arr = np.load(path, mmap_mode="r", allow_pickle=False)
+        except Exception as exc:  # noqa: BLE001 - any failure to read is the user's file
+            return [f"{where}: not a readable .npy array ({exc})"]
+        if arr.ndim != 2 or not np.issubdtype(arr.dtype, np.number):
+            return [f"{where}: must hold a 2-D numeric array of shape (N1, N2), "
+                    f"got shape {arr.shape} of {arr.dtype}"]
+        if grid and arr.shape != (len(x1), len(x2)):
+            return [f"{where}: array of shape {arr.shape}, but grid.points is "
+                    f"[{len(x1)}, {len(x2)}]; a .npy gap must be given on the scene's grid "
+                    f"(or use a netCDF file with coordinates x1, x2)"]
+        return []
+    import xarray as xr  # lazily: the numerical core does not need xarray
+
+    try:
+        ds = xr.open_dataset(path)
+    except Exception as exc:  # noqa: BLE001
+        return [f"{where}: not a readable netCDF file ({type(exc).__name__}: {exc}); "
+                f"give a netCDF file with a variable 'gap' over x1, x2, or a .npy array"]
+    with ds:
+        if "gap" not in ds.data_vars:
+            found = ", ".join(map(str, ds.data_vars)) or "none"
+            return [f"{where}: no variable 'gap' (found: {found}); the gap [m] must be a "
+                    f"variable 'gap' over dimensions x1, x2"]
+        gap = ds["gap"]
+        if set(gap.dims) != {"x1", "x2"}:
+            return [f"{where}: variable 'gap' has dimensions {tuple(gap.dims)}, "
+                    f"expected ('x1', 'x2')"]
+        units = str(gap.attrs.get("units", "m")).strip()
+        if units not in _METRE:
+            return [f"{where}: variable 'gap' has units {units!r}, expected 'm'"]
+        problems = []
+        ranges = {}
+        for dim in ("x1", "x2"):
+            if dim not in ds.coords:
+                problems.append(f"{where}: dimension {dim!r} has no coordinate [m]")
+                continue
+            c = np.asarray(ds[dim].values, dtype=float)
+            if c.size < 2 or not np.all(np.isfinite(c)) or np.unique(c).size != c.size:
+                problems.append(f"{where}: coordinate {dim!r} must hold at least 2 distinct "
+                                f"finite values [m], got {c.size} value(s)")
+                continue
+            ranges[dim] = (float(c.min()), float(c.max()))
+        if problems or not grid:
+            return problems
+        for dim, x in (("x1", x1), ("x2", x2)):
+            lo, hi = ranges[dim]
+            x = np.asarray(x, dtype=float)
+            slack = 1e-9 * (hi - lo)
+            if x.min() < lo - slack or x.max() > hi + slack:
+                problems.append(
+                    f"{where}: the grid's {dim} from {x.min():.6g} to {x.max():.6g} m lies "
+                    f"outside the file's {dim} from {lo:.6g} to {hi:.6g} m; shrink grid.size "
+                    f"or extend the file")
+        return problems
+
+
+def surface_gap(x1, x2, file):
+    """Gap read from a file [m].
+
+    Parameters
+    ----------
+    x1, x2 : array_like, shape (N1,) and (N2,)
+        Cell-centre coordinates [m].
+    file : str or path-like
+        Either a netCDF file with a variable ``gap`` [m] over dimensions ``x1``, ``x2``
+        (with coordinates in m, any order, covering the grid), interpolated linearly
+        onto the grid with xarray; or a ``.npy`` array of exactly shape (N1, N2), taken
+        as the gap at the cell centres.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N1, N2)
+        Initial gap [m], as the file gives it (not shifted: under force control a
+        constant offset only changes the rigid approach omega3).
+
+    Raises
+    ------
+    SceneError
+        The file is missing, unreadable, has no ``gap`` over ``x1``, ``x2``, has the
+        wrong shape, does not cover the grid, or holds NaN or inf.
+    """
+    problems = check_surface(file, x1, x2)
+    if problems:
+        raise SceneError(problems)
+    path = os.fspath(file)
+    if _is_npy(path):
+        out = np.array(np.load(path, allow_pickle=False), dtype=float)
+    else:
+        import xarray as xr
+
+        x1 = np.asarray(x1, dtype=float)
+        x2 = np.asarray(x2, dtype=float)
+        with xr.open_dataset(path) as ds:
+            gap = ds["gap"].load().transpose("x1", "x2").sortby(["x1", "x2"])
+        gap = gap.astype(float)
+        # Clip into the file's range: check_surface allowed a rounding-size overshoot.
+        x1c = np.clip(x1, float(gap.x1[0]), float(gap.x1[-1]))
+        x2c = np.clip(x2, float(gap.x2[0]), float(gap.x2[-1]))
+        out = np.asarray(gap.interp(x1=x1c, x2=x2c, method="linear").values, dtype=float)
+    if not np.all(np.isfinite(out)):
+        bad = int(np.count_nonzero(~np.isfinite(out)))
+        raise SceneError(f"geometry.file {path!r}: the gap holds NaN or inf at {bad} of "
+                         f"{out.size} grid points; every value must be finite [m]")
+    return out
+
