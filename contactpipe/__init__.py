@@ -1,0 +1,45 @@
+"""contactpipe: frictional stick-slip contact of elastic and linear viscoelastic bodies.
+
+Semi-analytical method (SAM) after Spinu et al., "A numerical solution to the
+Cattaneo-Mindlin problem for viscoelastic materials": only the contact surface is meshed,
+tractions are piecewise constant on an N1 x N2 grid, displacements come from influence
+coefficients by DC-FFT. Every simulation returns a labelled :class:`xarray.Dataset`
+(dimensions ``time``, ``x1``, ``x2``); archives are netCDF files written atomically.
+
+    >>> import contactpipe as cp
+    >>> scene = cp.Scene.from_toml("scene.toml")
+    >>> ds = cp.simulate(scene)
+    >>> cp.save(ds, "run.nc")
+
+All quantities are SI (m, s, N, Pa, J); see docs/conventions.md for signs.
+"""
+from importlib.metadata import PackageNotFoundError, version as _version
+
+try:
+    __version__ = _version("contactpipe")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0.1.0"
+
+from .exceptions import (ArchiveError, ContactpipeError, ConvergenceError, GridError,
+                         GrossSlidingError, SceneError)
+from .scene import Scene
+from .plan import Plan, plan
+from .simulate import simulate
+from .archive import open_archive, save
+
+__all__ = [
+    "__version__", "Scene", "simulate", "save", "open_archive", "plan", "Plan",
+    "SceneError", "ConvergenceError", "GrossSlidingError", "GridError", "ArchiveError",
+    "ContactpipeError",
+]
+
+
+def __getattr__(name):
+    # pipeline stages are imported on first use (they pull in dask.distributed/matplotlib)
+    if name in ("sweep", "open_sweep"):
+        from . import sweep as _sweep
+        return getattr(_sweep, name)
+    if name in ("compare",):
+        from . import compare as _compare
+        return _compare.compare
+    raise AttributeError(f"module 'contactpipe' has no attribute {name!r}")

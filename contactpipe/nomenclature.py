@@ -1,0 +1,110 @@
+"""One table: every archive variable -> dims, units, long_name, storage type.
+
+The names follow the paper's notation and CONTRACT §3. Everything that labels a result
+(:mod:`contactpipe.archive`, :mod:`contactpipe.results`, sweeps) reads this table; nothing
+else spells a unit or a long name.
+
+Keys of each entry
+------------------
+dims : tuple of str
+    ``FIELD`` (time, x1, x2) or ``SERIES`` (time,).
+units : str
+    SI unit (UDUNITS spelling); ``"1"`` for dimensionless numbers and counts.
+long_name : str
+    Human-readable meaning (CF ``long_name``).
+dtype : str
+    ``"float"`` (stored as float64 or float32, the archive's precision), or a fixed
+    integer type (``"int8"``, ``"int32"``).
+required : bool
+    In every archive. The others appear only when the scene needs them (frictional
+    contact, tangential load), as ``tools/check_contract.py`` expects.
+flag_values, flag_meanings
+    CF flags, ``status`` only.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["FIELD", "SERIES", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS", "REQUIRED_ATTRS",
+           "CONVENTIONS", "STATUS_SEPARATED", "STATUS_STICK", "STATUS_SLIP", "cf_attrs"]
+
+FIELD = ("time", "x1", "x2")
+SERIES = ("time",)
+
+CONVENTIONS = "CF-1.10"
+
+STATUS_SEPARATED, STATUS_STICK, STATUS_SLIP = 0, 1, 2
+
+
+def _v(dims, units, long_name, dtype="float", required=False, **extra):
+    return {"dims": dims, "units": units, "long_name": long_name, "dtype": dtype,
+            "required": required, **extra}
+
+
+VARIABLES: dict[str, dict] = {
+    # fields over the contact grid
+    "p": _v(FIELD, "Pa", "contact pressure", required=True),
+    "q1": _v(FIELD, "Pa", "shear traction along x1"),
+    "q2": _v(FIELD, "Pa", "shear traction along x2"),
+    "u1": _v(FIELD, "m", "relative surface displacement along x1"),
+    "u2": _v(FIELD, "m", "relative surface displacement along x2"),
+    "u3": _v(FIELD, "m", "relative normal surface displacement (> 0 opens the gap)",
+             required=True),
+    "h": _v(FIELD, "m", "gap", required=True),
+    "s1": _v(FIELD, "m", "accumulated slip of body 1 relative to body 2 along x1"),
+    "s2": _v(FIELD, "m", "accumulated slip of body 1 relative to body 2 along x2"),
+    "status": _v(FIELD, "1", "contact status", dtype="int8", required=True,
+                 flag_values=(STATUS_SEPARATED, STATUS_STICK, STATUS_SLIP),
+                 flag_meanings="separated stick slip"),
+    # time series
+    "W": _v(SERIES, "N", "normal force", required=True),
+    "T1": _v(SERIES, "N", "tangential force along x1"),
+    "T2": _v(SERIES, "N", "tangential force along x2"),
+    "omega1": _v(SERIES, "m", "rigid-body displacement of body 1 relative to body 2 along x1"),
+    "omega2": _v(SERIES, "m", "rigid-body displacement of body 1 relative to body 2 along x2"),
+    "omega3": _v(SERIES, "m", "normal approach of body 1 towards body 2 (> 0 presses)",
+                 required=True),
+    "contact_area": _v(SERIES, "m2", "contact area", required=True),
+    "stick_area": _v(SERIES, "m2", "stick area"),
+    "dissipation": _v(SERIES, "J", "frictional energy dissipated so far"),
+    "iterations": _v(SERIES, "1", "solver iterations spent on that step (inner, all loops)",
+                     dtype="int32", required=True),
+    # solver diagnostics
+    "coupling_passes": _v(SERIES, "1", "normal-tangential passes at that step", dtype="int32"),
+    "fft_pairs": _v(SERIES, "1", "forward+inverse padded FFT pairs spent on that step",
+                    dtype="int32"),
+}
+
+COORDINATES: dict[str, dict] = {
+    "time": {"units": "s", "long_name": "time"},
+    "x1": {"units": "m", "long_name": "cell centre along x1"},
+    "x2": {"units": "m", "long_name": "cell centre along x2"},
+    "t_norm": {"units": "1", "long_name": "dimensionless time (t - t0)/window"},
+}
+
+# Global attributes of every archive (CONTRACT §3) and their meaning.
+GLOBAL_ATTRS: dict[str, str] = {
+    "Conventions": "CF version followed: " + CONVENTIONS,
+    "contactpipe_version": "version of contactpipe that wrote the archive",
+    "scene": "the validated scene as TOML text, enough to re-run it",
+    "models": "the sub-models the scene needed and used",
+    "wall_time_s": "wall-clock time of the simulation [s]",
+    "complete": "'true' once the archive was fully written",
+}
+# What a dataset must carry before it is written ("complete" is set by the writer).
+REQUIRED_ATTRS = ("Conventions", "contactpipe_version", "scene", "models", "wall_time_s")
+
+_ATTR_KEYS = ("units", "long_name", "flag_values", "flag_meanings")
+
+
+def cf_attrs(name: str) -> dict:
+    """The CF attributes (units, long_name, flags) of a variable or coordinate ``name``.
+
+    Ready for netCDF: ``flag_values`` is an array of the variable's own integer type, as
+    CF asks.
+    """
+    entry = VARIABLES.get(name) or COORDINATES[name]
+    out = {k: entry[k] for k in _ATTR_KEYS if k in entry}
+    if "flag_values" in out:
+        out["flag_values"] = np.asarray(out["flag_values"], dtype=entry["dtype"])
+    return out

@@ -1,0 +1,138 @@
+"""The influence operator of a body pair on one grid: cached kernel spectra, applied by DC-FFT.
+
+``u = K ⊛ [q1, q2, p]`` with the pair kernels of paper eq. (8) (docs/conventions.md).
+Each body's kernel spectra are computed once per (grid, body) and cached for the process;
+the operator of a time step is a linear combination of them, weighted by the creep
+factors of the time rule (paper eq. 9), formed once per run in spectral space.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from .convolution import Convolver
+from .influence import body_kernels, pair_kernels
+
+__all__ = ["BodySpectra", "ContactOperator", "body_spectra"]
+
+COMPONENTS = ("11", "12", "13", "21", "22", "23", "31", "32", "33")
+
+
+class BodySpectra(dict):
+    """Kernel spectra (scaled for the inverse FFT) of one body on one grid: key 'ij'."""
+
+
+@lru_cache(maxsize=16)
+def _body_spectra_cached(n1, n2, d1, d2, young, poisson, backend, threads):
+    conv = _convolver(n1, n2, backend, threads)
+    kernels = body_kernels(n1, n2, d1, d2, young, poisson)
+    return BodySpectra({k: conv.kernel_spectrum(v) for k, v in kernels.items()})
+
+
+@lru_cache(maxsize=8)
+def _convolver(n1, n2, backend, threads):
+    return Convolver(n1, n2, backend=backend, threads=threads)
+
+
+def body_spectra(body, n1, n2, d1, d2, backend="auto", threads=1):
+    """Spectra of one body's nine kernels, or None for a rigid body (cached)."""
+    if body.rigid:
+        return None
+    return _body_spectra_cached(int(n1), int(n2), float(d1), float(d2), float(body.young),
+                                float(body.poisson), backend, int(threads))
+
+
+class ContactOperator:
+    """Relative displacement of a body pair from cell tractions, on one grid.
+
+    Parameters
+    ----------
+    spectra1, spectra2 : BodySpectra or None
+        Spectra of the indenter (body 1) and half-space (body 2); None when rigid.
+    w1, w2 : float
+        Creep weights of the current traction increment for each body [1]
+        (1 for elastic bodies).
+    conv : Convolver
+        The convolution engine of the grid (it counts the FFT pairs).
+    """
+
+    def __init__(self, spectra1, spectra2, w1, w2, conv: Convolver):
+        self.conv = conv
+        self.w1, self.w2 = float(w1), float(w2)
+        s1 = spectra1 if (spectra1 is not None and self.w1 != 0.0) else None
+        s2 = spectra2 if (spectra2 is not None and self.w2 != 0.0) else None
+        self.rigid = s1 is None and s2 is None
+        self.k = pair_kernels(s1, s2, self.w1, self.w2) if not self.rigid else None
+
+    # -- the pieces the inner problems need -------------------------------------------
+    def normal(self, p):
+        """u3 [m] from the pressure p [Pa] (one FFT pair)."""
+        return self.conv.convolve(self.k["33"], p)
+
+    def tangential_scalar(self, q1):
+        """u1 [m] from q1 [Pa] (one FFT pair; the Cattaneo-Mindlin form, q2 = 0)."""
+        return self.conv.convolve(self.k["11"], q1)
+
+    def tangential_vector(self, q):
+        """(u1, u2) [m] from (q1, q2) [Pa] (two FFT pairs)."""
+        k = self.k
+        return self.conv.convolve_matrix([[k["11"], k["12"]], [k["21"], k["22"]]], [q[0], q[1]])
+
+    def coupling_to_normal(self, q1, q2=None):
+        """u3 [m] from the shear tractions (K31, K32)."""
+        k = self.k
+        return self.conv.convolve_matrix([[k["31"], k["32"]]], [q1, q2])[0]
+
+    def coupling_to_tangential(self, p, two_components=True):
+        """(u1, u2) [m] (or u1 alone) from the pressure (K13, K23)."""
+        k = self.k
+        rows = [[k["13"]], [k["23"]]] if two_components else [[k["13"]]]
+        return self.conv.convolve_matrix(rows, [p])
+
+    def in_plane(self, q1=None, q2=None, p=None):
+        """(u1, u2) [m] from all tractions (2 inverse transforms)."""
+        k = self.k
+        rows = [[k[f"{i}1"], k[f"{i}2"], k[f"{i}3"]] for i in (1, 2)]
+        return self.conv.convolve_matrix(rows, [q1, q2, p])
+
+    def self_influence(self, component="11"):
+        """Displacement of a cell under its own unit traction, K_ij(0, 0) [m/Pa]."""
+        k = self.k[component]
+        m2 = self.conv.m2
+        total = k[:, 0].sum() + 2.0 * k[:, 1:m2 // 2].sum() + k[:, m2 // 2].sum()
+        return float(np.real(total))
+
+    def full(self, p, q1=None, q2=None):
+        """(u1, u2, u3) [m] from all tractions (3 forward, 3 inverse transforms at most)."""
+        k = self.k
+        rows = [[k[f"{i}1"], k[f"{i}2"], k[f"{i}3"]] for i in (1, 2, 3)]
+        return self.conv.convolve_matrix(rows, [q1, q2, p])
+
+
+def history_displacement(spectra1, spectra2, h1, h2, conv: Convolver, outputs=(1, 2, 3)):
+    """Known displacement from the bodies' Boltzmann history tractions (weights already in).
+
+    Parameters
+    ----------
+    spectra1, spectra2 : BodySpectra or None
+        Kernel spectra of body 1 and body 2 (None: rigid or no history).
+    h1, h2 : sequence of 3 arrays or None
+        History tractions [Pa] for (q1, q2, p) of each body; an entry may be None (zero).
+    outputs : tuple of int
+        Which displacement components to return (1, 2, 3).
+
+    Returns
+    -------
+    ndarray (len(outputs), n1, n2)
+        Relative displacement [m] with the signs of eq. (8).
+    """
+    out = np.zeros((len(outputs), conv.n1, conv.n2))
+    for spectra, h, first in ((spectra1, h1, True), (spectra2, h2, False)):
+        if spectra is None or h is None:
+            continue
+        k = pair_kernels(spectra, None) if first else pair_kernels(None, spectra)
+        rows = [[k[f"{i}{j}"] for j in (1, 2, 3)] for i in outputs]
+        xs = [None if (hj is None or not np.any(hj)) else hj for hj in h]
+        out += conv.convolve_matrix(rows, xs)
+    return out
