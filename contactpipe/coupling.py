@@ -95,8 +95,8 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, q_prev, u_prev, p_guess, plan
         Warm start of the pressure [Pa].
     plan : Plan
     want_u : bool
-        Assemble the full relative displacement u (for output) — costs one extra
-        convolution in the one-component form.
+        Unused (kept for callers); u is always assembled from what the solves computed,
+        in-plane components only when a tangential model runs.
     """
     tang, coupled = plan.tangential, plan.coupling != "none"
     vector = tang == "vector"
@@ -173,11 +173,13 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, q_prev, u_prev, p_guess, plan
                                      "coupling")
 
     u = U.copy()
-    if want_u or tang != "none":
-        u[2] += n.Ap
-        if coupled and tang != "none":
+    if op.rigid:            # no compliance for this increment: the known part is all
+        return InstantResult(p, q, u, n.omega3, domega, its, passes, True, worst)
+    u[2] += n.Ap
+    if tang != "none":
+        if coupled:
             u[2] += op.coupling_to_normal(q[0], q[1] if vector else None)
-        if tang == "vector" and t_res is not None:
+        if vector and t_res is not None:
             u[:2] += t_res.Aq                      # reuse the solver's A q
             if coupled:
                 u[:2] += op.coupling_to_tangential(p)

@@ -1,0 +1,128 @@
+"""simulate(): the Dataset of CONTRACT §3, streaming archives, options, errors, CLI run."""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import contactpipe as cp
+from contactpipe.cli import main as cli_main
+
+from conftest import A_HERTZ, W, fretting_scene, make_scene
+
+FIELDS = {"p": "Pa", "u3": "m", "h": "m"}
+SERIES = {"W": "N", "omega3": "m", "contact_area": "m2", "iterations": "1"}
+FRICTIONAL_FIELDS = {"q1": "Pa", "q2": "Pa", "u1": "m", "u2": "m", "s1": "m", "s2": "m"}
+FRICTIONAL_SERIES = {"T1": "N", "T2": "N", "omega1": "m", "omega2": "m", "stick_area": "m2",
+                     "dissipation": "J"}
+
+
+def creep_scene(steps=6, **kw):
+    return cp.Scene(name="creep", geometry={"shape": "sphere", "radius": 0.018},
+                    indenter={"material": "rigid"},
+                    halfspace={"material": "viscoelastic", "young": 105e9, "poisson": 0.3,
+                               "creep": "maxwell", "relaxation_time": 1.0},
+                    load={"time": [0.0, 1.0], "normal_force": W},
+                    grid={"points": [24, 24], "size": [2.4e-3, 2.4e-3]}, time={"steps": steps},
+                    **kw)
+
+
+def check_schema(ds, frictional):
+    assert tuple(ds.p.dims) == ("time", "x1", "x2")
+    for d in ("time", "x1", "x2"):
+        assert d in ds.coords and np.all(np.diff(ds[d].values) > 0)
+    want = {**FIELDS, **SERIES, **((FRICTIONAL_FIELDS | FRICTIONAL_SERIES) if frictional else {})}
+    for name, unit in want.items():
+        assert name in ds, name
+        assert ds[name].attrs["units"] == unit, name
+    assert ds.status.attrs["flag_meanings"] == "separated stick slip"
+    for a in ("Conventions", "contactpipe_version", "scene", "models", "wall_time_s"):
+        assert a in ds.attrs
+    # the scene attribute re-runs the scene
+    assert cp.Scene.from_toml_text(ds.attrs["scene"]).to_dict()["load"] is not None
+
+
+def test_frictionless_dataset_schema():
+    ds = cp.simulate(creep_scene())
+    check_schema(ds, frictional=False)
+    assert "q1" not in ds and "s1" not in ds          # no tangential model ran
+    assert ds.attrs["models"].startswith("normal=polonsky_keer, tangential=none")
+    assert ds.sizes["time"] == 7
+
+
+def test_frictional_dataset_schema():
+    ds = cp.simulate(fretting_scene(n=32, steps=8))
+    check_schema(ds, frictional=True)
+    assert "tangential=scalar" in ds.attrs["models"] and "coupling=none" in ds.attrs["models"]
+    assert float(ds.T1[1]) == pytest.approx(56.25, rel=1e-9)    # t = 0.125 s on the 0 -> 90 N ramp
+
+
+def test_archive_round_trip(tmp_path):
+    ds = cp.simulate(creep_scene())
+    path = cp.save(ds, tmp_path / "a.nc")
+    back = cp.open_archive(path)
+    assert back.p.chunks is not None                   # lazy, dask-backed
+    xr.testing.assert_allclose(ds, back.load())
+    assert back.attrs["scene"] == ds.attrs["scene"]
+
+
+def test_streamed_archive_equals_in_memory(tmp_path):
+    a = cp.simulate(creep_scene())
+    b = cp.simulate(creep_scene(), tmp_path / "b.nc")
+    xr.testing.assert_allclose(a.drop_vars(["iterations", "fft_pairs"]),
+                               b.load().drop_vars(["iterations", "fft_pairs"]))
+
+
+def test_output_stride_and_float32(tmp_path):
+    sc = creep_scene(steps=10, output={"stride": 4, "precision": "float32"})
+    ds = cp.simulate(sc, tmp_path / "s.nc")
+    np.testing.assert_allclose(ds.time.values, [0.0, 0.4, 0.8, 1.0])   # every 4th and the last
+    assert ds.p.dtype == np.float32
+
+
+def test_interrupted_write_leaves_no_file(tmp_path):
+    """A run that fails mid-way (contact reaching the grid edge at a later step) leaves
+    nothing at the target path and no temporary file."""
+    sc = cp.Scene(name="grows", geometry={"shape": "sphere", "radius": 0.018},
+                  indenter={"material": "rigid"},
+                  halfspace={"material": "viscoelastic", "young": 105e9, "poisson": 0.3,
+                             "creep": "maxwell", "relaxation_time": 0.01},
+                  load={"time": [0.0, 1.0], "normal_force": W},
+                  grid={"points": [16, 16], "size": [1.6e-3, 1.6e-3]}, time={"steps": 10})
+    target = tmp_path / "x.nc"
+    with pytest.raises(cp.GridError, match="edge of the grid"):
+        cp.simulate(sc, target)
+    assert not target.exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_no_nan_anywhere():
+    ds = cp.simulate(fretting_scene(n=24, steps=6))
+    for v in ds.data_vars:
+        assert np.all(np.isfinite(ds[v].values)), v
+
+
+def test_cli_run_writes_archive(tmp_path):
+    scene = tmp_path / "s.toml"
+    scene.write_text(creep_scene().to_toml())
+    out = tmp_path / "o.nc"
+    assert cli_main(["run", str(scene), "-o", str(out), "--no-progress"]) == 0
+    assert cp.open_archive(out).sizes["time"] == 7
+
+
+def test_cli_bad_scene_one_line(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(creep_scene().to_toml().replace("poisson = 0.3", "poisson = 0.7"))
+    r = subprocess.run([sys.executable, "-m", "contactpipe.cli", "run", str(bad), "-o",
+                        str(tmp_path / "o.nc")], capture_output=True, text=True)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "halfspace.poisson" in lines[0] and "Traceback" not in r.stderr
+    assert not (tmp_path / "o.nc").exists()
+
+
+def test_cli_missing_file(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "contactpipe.cli", "run", str(tmp_path / "no.toml"),
+                        "-o", str(tmp_path / "o.nc")], capture_output=True, text=True)
+    assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1
