@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import box_cg
+from .cg import box_cg, fista, project_box_sum
 
 __all__ = ["TangentialResult", "solve_scalar", "solve_vector", "disk_project"]
 
@@ -64,14 +64,22 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
     """
     scale = max(float(bound.sum()), 1e-300)
     res = box_cg(op.tangential_scalar, b1, -bound, bound, T1 / cell_area, q0, tol=tol,
-                 max_iter=max_iter, restore="shift", scale=scale, Ax0=Aq0)
+                 max_iter=max(1, max_iter // 2), restore="shift", scale=scale, Ax0=Aq0)
+    x, Ax, its, err, ok, lam = res.x, res.Ax, res.iterations, res.residual, res.converged, \
+        res.multiplier
+    if not ok:   # (nearly) full slip: finish with the projected gradient, which always converges
+        x, Ax, more, err, ok = fista(op.tangential_scalar, b1,
+                                     lambda y: project_box_sum(y, -bound, bound, T1 / cell_area),
+                                     x, _lipschitz(op, 1), tol, max_iter - its, scale)
+        its += more
+        stick = (bound > 0) & (np.abs(x) < bound * (1.0 - 1e-12))
+        lam = float(_multiplier((Ax + b1)[None], stick)[0])
     q = np.zeros((2,) + b1.shape)
-    q[0] = res.x
+    q[0] = x
     Aq = np.zeros_like(q)
-    Aq[0] = res.Ax
-    return TangentialResult(q=q, domega=np.array([res.multiplier, 0.0]), Aq=Aq,
-                            iterations=res.iterations, residual=res.residual,
-                            converged=res.converged)
+    Aq[0] = Ax
+    return TangentialResult(q=q, domega=np.array([lam, 0.0]), Aq=Aq, iterations=its,
+                            residual=err, converged=ok)
 
 
 def disk_project(q, rho):
@@ -266,46 +274,20 @@ def project_disks_sum(y, rho, target):
     return xout
 
 
-def _vector_fista(op, b, rho, target, q0, tol, max_iter, scale):
-    """Accelerated projected gradient with adaptive restart (O'Donoghue & Candès 2015).
-
-    Guaranteed to converge (the problem is convex); stops on the natural residual
-    Σ|q − P(q − ∇f/L)| / scale. L is the largest eigenvalue of the 2 x 2 kernel block over
-    the padded spectrum, an upper bound of the operator's norm.
-    """
+def _lipschitz(op, components):
+    """Largest eigenvalue of the tangential kernel block over the padded spectrum: an upper
+    bound of the operator's norm (the step of the projected gradient)."""
     k = op.k
     m = op.conv.m1 * op.conv.m2
-    a, c, d = (np.real(k["11"]) * m, np.real(k["12"]) * m, np.real(k["22"]) * m)
-    L = float(np.max(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + c ** 2)))
-    x = project_disks_sum(q0, rho, target)
-    y, tk = x.copy(), 1.0
-    Ay = op.tangential_vector(y)
-    f_old = np.inf
-    err = np.inf
-    it = 0
-    for it in range(1, max_iter + 1):
-        grad = Ay + b
-        x_new = project_disks_sum(y - grad / L, rho, target)
-        err = np.abs(x_new - y).sum() / scale        # natural residual at y
-        Ax = op.tangential_vector(x_new)
-        f_new = 0.5 * float(np.sum(x_new * Ax)) + float(np.sum(b * x_new))
-        if err < tol:
-            x, Axf = x_new, Ax
-            break
-        if f_new > f_old:                             # restart the momentum
-            tk = 1.0
-        t_next = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * tk * tk))
-        y = x_new + ((tk - 1.0) / t_next) * (x_new - x)
-        Ay = Ax + ((tk - 1.0) / t_next) * (Ax - (Axf if it > 1 else op.tangential_vector(x)))
-        x, Axf, tk, f_old = x_new, Ax, t_next, f_new
-    else:
-        Axf = op.tangential_vector(x)
-    g = Axf + b
-    mag = np.hypot(x[0], x[1])
-    stick = (rho > 0) & (mag < rho * (1.0 - 1e-12))
-    lam = g[:, stick].mean(axis=1) if stick.any() else np.zeros(2)
-    return TangentialResult(q=x, domega=lam, Aq=Axf, iterations=it, residual=float(err),
-                            converged=bool(err < tol))
+    a = np.real(k["11"]) * m
+    if components == 1:
+        return float(np.max(a))
+    c, d = np.real(k["12"]) * m, np.real(k["22"]) * m
+    return float(np.max(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + c ** 2)))
+
+
+def _multiplier(g, stick):
+    return g[..., stick].mean(axis=-1) if stick.any() else np.zeros(g.shape[:-2])
 
 
 def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
@@ -329,13 +311,16 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
     The preconditioned projected CG (:func:`_vector_cg`) is tried first with half the
     iteration budget; where it does not converge — typically when (almost) every cell
     slips and the multiplier Δω is not pinned by stick cells — the accelerated projected
-    gradient (:func:`_vector_fista`), which always converges, finishes from its iterate.
+    gradient (:func:`contactpipe.cg.fista`), which always converges, finishes from its iterate.
     """
     res = _vector_cg(op, b, bound, T, cell_area, q0, tol, max(1, max_iter // 2), Aq0)
     if res.converged:
         return res
-    scale = max(float(bound.sum()), 1e-300)
-    fb = _vector_fista(op, b, bound, np.asarray(T, dtype=float) / cell_area, res.q, tol,
-                       max_iter - res.iterations, scale)
-    fb.iterations += res.iterations
-    return fb
+    target = np.asarray(T, dtype=float) / cell_area
+    q, Aq, its, err, ok = fista(op.tangential_vector, b,
+                                lambda y: project_disks_sum(y, bound, target), res.q,
+                                _lipschitz(op, 2), tol, max_iter - res.iterations,
+                                max(float(bound.sum()), 1e-300))
+    stick = (bound > 0) & (np.hypot(q[0], q[1]) < bound * (1.0 - 1e-12))
+    return TangentialResult(q=q, domega=_multiplier(Aq + b, stick), Aq=Aq,
+                            iterations=its + res.iterations, residual=err, converged=ok)
