@@ -58,7 +58,7 @@ def _n_steps(scene):
 
 
 def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None,
-             fft=None, threads=None):
+             fft=None, threads=None, on_step=None):
     """Run one scene; return its labelled :class:`xarray.Dataset` (CONTRACT §3).
 
     Parameters
@@ -76,6 +76,9 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         against the scene.
     fft, threads : optional
         Override ``solver.fft`` and ``solver.threads``.
+    on_step : callable, optional
+        Called after every instant as ``on_step(k, t_k, record)`` with the instant's
+        outputs (a dict of arrays and numbers, as written to the archive).
 
     Returns
     -------
@@ -221,10 +224,12 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
             for i, m in enumerate(mems):
                 if m is not None:
                     m.commit(np.stack([q[0], q[1], p]))
+            record = _record(scene, pl, gap, p, q, u, s, omega, W[k], T, dissipation,
+                             iterations, passes, conv.pairs - pairs0, mu, cell, tang)
             if k % stride == 0 or k == t.size - 1:
-                writer.append(t[k], _record(scene, pl, gap, p, q, u, s, omega, W[k], T,
-                                            dissipation, iterations, passes,
-                                            conv.pairs - pairs0, mu, cell, tang))
+                writer.append(t[k], record)
+            if on_step is not None:
+                on_step(k, float(t[k]), record)
             if bar is not None:
                 bar.update(1)
     except BaseException:
