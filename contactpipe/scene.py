@@ -948,7 +948,9 @@ class Solver:
     threads : int
         FFT threads, >= 1.
     accuracy : {None, "fast", "balanced", "accurate"}
-        Reserved (validated only).
+        Ask for an accuracy preset: the grid points and time steps are then chosen by
+        :func:`contactpipe.accuracy.resolve_accuracy` (replacing ``grid.points`` and
+        ``time.steps``) and the choice is recorded in the archive.
     """
 
     tolerance: float = 1e-9

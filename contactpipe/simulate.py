@@ -24,7 +24,8 @@ import numpy as np
 
 from .convolution import Convolver
 from .coupling import solve_instant
-from .exceptions import ConvergenceError, GridError
+from .exceptions import ConvergenceError, GridError, GrossSlidingError
+from .accuracy import resolve_accuracy
 from .memory import make_memory
 from .operator import ContactOperator, body_spectra, history_displacement
 from .plan import plan as make_plan
@@ -95,6 +96,7 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     from .archive import ArchiveWriter, MemoryWriter, open_archive
 
     wall0 = _time.perf_counter()
+    scene, accuracy_note = resolve_accuracy(scene)
     pl = make_plan(scene, tangential=tangential, coupling=coupling)
     sv = scene.solver
     x1, x2, d1, d2 = grid_coordinates(scene)
@@ -150,7 +152,11 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         "dundurs_beta": _beta(b1, b2),
         "fft_backend": conv.backend,
         "grid_spacing_m": [d1, d2],
+        "grid_points": [n1, n2],
+        "time_steps": steps,
     }
+    if accuracy_note:
+        attrs["accuracy"] = accuracy_note
     out = scene.output
     writer_cls = ArchiveWriter if path is not None else MemoryWriter
     writer = writer_cls(path, x1, x2, fields + series, attrs, precision=out.precision,
@@ -207,6 +213,14 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
                                     normal=last_normal if same_normal else None)
                 iterations += res.iterations
                 passes += res.passes
+                if not res.converged and res.failed == "tangential" and \
+                        np.hypot(*T) >= 0.99 * mu * W[k] > 0:
+                    raise GrossSlidingError(
+                        f"step {k} (t = {t[k]:.6g} s): the stick zone was lost under "
+                        f"|T| = {np.hypot(*T):.6g} N against mu * W = {mu * W[k]:.6g} N "
+                        f"(residual {res.residual:.3g}); the contact slides as a whole, which "
+                        f"has no static solution under force control. Lower the tangential "
+                        f"force or refine the grid.")
                 if not res.converged:
                     raise ConvergenceError(
                         f"{res.failed} problem at step {k} (t = {t[k]:.6g} s) stopped after "

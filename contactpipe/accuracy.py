@@ -1,0 +1,108 @@
+"""Accuracy presets: choose the grid and the time steps for an error target.
+
+A scene may ask for ``solver.accuracy = "fast" | "balanced" | "accurate"``; the grid
+points and the number of time steps are then chosen here (the values written in the scene
+file for ``grid.points`` and ``time.steps`` are replaced, and the archive records the
+choice in its attributes and its ``scene`` text). Each preset is a number of cells across
+the largest contact diameter of the window, a number of steps per loading cycle of the
+tangential program, and a number of steps per relaxation (retardation) time of the
+viscoelastic bodies. The numbers come from the speed-accuracy study
+(``studies/speed_accuracy.py``, table in ``studies/README.md``), which measured the error
+against Hertz, Mindlin-Deresiewicz and Lee-Radok with the second-order time rule.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .exceptions import SceneError
+
+__all__ = ["PRESETS", "Preset", "resolve_accuracy"]
+
+
+@dataclass(frozen=True)
+class Preset:
+    """What a preset asks for, and the error it was measured to reach."""
+
+    cells_across_contact: int     # cells across the largest contact diameter
+    steps_per_cycle: int          # steps per full cycle of the tangential program
+    steps_per_relaxation: int     # steps per relaxation/retardation time of the bodies
+    target: float                 # relative error reached (stick radius, traction, a³)
+
+
+PRESETS = {
+    "fast": Preset(cells_across_contact=24, steps_per_cycle=20, steps_per_relaxation=5,
+                   target=0.05),
+    "balanced": Preset(cells_across_contact=48, steps_per_cycle=40, steps_per_relaxation=10,
+                       target=0.01),
+    "accurate": Preset(cells_across_contact=96, steps_per_cycle=80, steps_per_relaxation=20,
+                       target=0.002),
+}
+
+
+def _tangential_cycles(scene) -> float:
+    """Full cycles of the tangential program: the path length of |T| over 4 T_max."""
+    t, _, T1, T2 = scene.load.knots()
+    T = np.hypot(np.asarray(T1, float), np.asarray(T2, float))
+    if T.max() == 0:
+        return 0.0
+    path = np.abs(np.diff(np.asarray(T1, float))).sum() + np.abs(np.diff(np.asarray(T2, float))).sum()
+    return float(path / (4.0 * T.max()))
+
+
+def _characteristic_times(scene):
+    out = []
+    for spec in (scene.indenter, scene.halfspace):
+        for key in ("relaxation_time", "retardation_time"):
+            v = getattr(spec, key, None)
+            if v:
+                out.append(float(v))
+        if getattr(spec, "terms", None):
+            out.extend(float(tau) for _, tau in spec.terms)
+    return out
+
+
+def resolve_accuracy(scene):
+    """The scene with grid points and steps chosen by its accuracy preset (or as is).
+
+    Returns (scene, note): ``note`` says what was chosen, for the archive.
+    """
+    name = scene.solver.accuracy
+    if name is None:
+        return scene, ""
+    if name not in PRESETS:
+        raise SceneError(f"solver.accuracy = {name!r}: allowed {', '.join(PRESETS)}")
+    pre = PRESETS[name]
+    if scene.geometry.shape == "surface":
+        raise SceneError("solver.accuracy with geometry.shape = 'surface': the contact size "
+                         "cannot be estimated; give grid.points and time.steps instead")
+    from .scene import _hertz_size
+    auto_side = _hertz_size(scene.geometry, scene.indenter, scene.halfspace, scene.load)
+    # _hertz_size gives 3 a_max for sphere/ellipsoid, 2.5 R for a flat punch
+    factor = 2.5 if scene.geometry.shape == "flat_punch" else 3.0
+    a_max = [s / factor for s in auto_side]
+    side = auto_side if scene.grid.size == "auto" else scene.grid.size
+    points = []
+    for L, a in zip(side, a_max):
+        n = int(math.ceil(pre.cells_across_contact * L / (2.0 * a)))
+        n += n % 2
+        points.append(min(max(n, 8), 4096))
+    knots = len(scene.load.knots()[0]) - 1
+    steps = knots
+    cycles = _tangential_cycles(scene)
+    if cycles > 0:
+        steps = max(steps, int(math.ceil(pre.steps_per_cycle * cycles)))
+    times = _characteristic_times(scene)
+    if times and knots > 0:
+        steps = max(steps, int(math.ceil(pre.steps_per_relaxation * scene.load.window
+                                         / min(times))))
+    changes = {"grid.points": points}
+    if knots > 0:
+        changes["time.steps"] = steps
+    resolved = scene.replace(changes)
+    note = (f"accuracy preset '{name}' (target {pre.target:g}): {points[0]}x{points[1]} cells "
+            f"({pre.cells_across_contact} across the largest contact), "
+            f"{steps} steps")
+    return resolved, note
