@@ -46,7 +46,7 @@ from .nomenclature import (
 )
 
 __all__ = ["ArchiveWriter", "MemoryWriter", "to_dataset", "save", "open_archive",
-           "is_complete", "validate", "PRECISIONS", "SERIES_CHUNK"]
+           "is_complete", "validate", "resumable_part", "PRECISIONS", "SERIES_CHUNK"]
 
 PRECISIONS = ("float64", "float32")
 SERIES_CHUNK = 1024        # time steps per on-disk chunk of a series (and of `time`)
@@ -201,6 +201,12 @@ def _storage_dtype(name: str, precision: np.dtype) -> np.dtype:
 
 def _temp_path(path: pathlib.Path) -> pathlib.Path:
     return path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.part")
+
+
+def resumable_part(path) -> pathlib.Path:
+    """The fixed part-file name of a resumable write of ``path``."""
+    path = pathlib.Path(path)
+    return path.with_name(f".{path.name}.resumable.part")
 
 
 def _fsync(path: pathlib.Path) -> None:
@@ -390,13 +396,18 @@ class ArchiveWriter(_StepWriter):
     """
 
     def __init__(self, path, x1, x2, variables: list[str], attrs: dict,
-                 precision="float64", compress=True):
+                 precision="float64", compress=True, resumable=False, resume_steps=None):
         self.path = pathlib.Path(path)
         super().__init__(x1, x2, variables, attrs, precision)
         self.compress = bool(compress)
-        self._tmp = _temp_path(self.path)
+        self.resumable = bool(resumable)
+        self._tmp = resumable_part(self.path) if resumable else _temp_path(self.path)
+        if resume_steps is not None:
+            self._reopen(int(resume_steps))
+            return
         try:
-            nc = netCDF4.Dataset(self._tmp, mode="w", format="NETCDF4", clobber=False)
+            nc = netCDF4.Dataset(self._tmp, mode="w", format="NETCDF4",
+                                 clobber=self.resumable)
         except Exception as e:             # noqa: BLE001 - reported with the path
             self._done = True
             raise ArchiveError(f"{self.path}: cannot create the temporary file "
@@ -414,6 +425,38 @@ class ArchiveWriter(_StepWriter):
 
     def _label(self) -> str:
         return str(self.path)
+
+    def _reopen(self, steps: int) -> None:
+        """Continue a resumable write: reopen its part file after ``steps`` instants."""
+        try:
+            nc = netCDF4.Dataset(self._tmp, mode="a")
+            have = len(nc.dimensions["time"])
+            if have < steps:
+                raise ArchiveError(f"the part file holds {have} instants, the checkpoint "
+                                   f"{steps}")
+            self._last_t = float(nc["time"][steps - 1]) if steps else None
+        except Exception as e:             # noqa: BLE001 - reported with the path
+            self._done = True
+            raise ArchiveError(f"{self.path}: cannot resume from {self._tmp.name} "
+                               f"({_one_line(e)})") from e
+        self._nc = nc
+        self.steps = steps
+        self._finalizer = weakref.finalize(self, _discard, nc, self._tmp)
+
+    def flush(self) -> None:
+        """Push what was appended to disk (before a checkpoint)."""
+        self._nc.sync()
+
+    def suspend(self) -> None:
+        """Close the part file and keep it for a later resume (resumable writers only)."""
+        if not self.resumable:
+            return self.abort()
+        self._finalizer.detach()
+        try:
+            self._nc.close()
+        except Exception:                  # noqa: BLE001 - already broken: nothing to keep
+            pass
+        self._done = True
 
     def _define(self) -> None:
         nc = self._nc

@@ -42,6 +42,9 @@ def _add_run(sub):
     p.add_argument("--fft", choices=("auto", "pyfftw", "scipy"), default=None)
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--resume", action="store_true",
+                   help="resumable run: an interrupted run (Ctrl-C, killed) keeps its part "
+                        "file and checkpoint beside OUT, and the same command continues it")
     p.set_defaults(func=_run)
 
 
@@ -52,7 +55,7 @@ def _run(args) -> int:
     tangential = None if args.tangential in (None, "auto") else args.tangential
     args.output.parent.mkdir(parents=True, exist_ok=True)
     ds = simulate(scene, args.output, progress=not args.no_progress, tangential=tangential,
-                  fft=args.fft, threads=args.threads)
+                  fft=args.fft, threads=args.threads, resume=args.resume)
     print(f"wrote {args.output} ({ds.sizes['time']} instants, {ds.attrs['models']}, "
           f"{float(ds.attrs['wall_time_s']):.2f} s)")
     if args.figure is not None:

@@ -106,6 +106,13 @@ class RecursiveMemory:
         """Arrays that fully describe the memory (for checkpoints)."""
         return {"k": self.k, "integral": self._integral, "exp": self._exp, "prev": self._prev}
 
+    def load_state(self, state) -> None:
+        """Restore what :meth:`state` gave."""
+        self.k = int(state["k"])
+        self._integral = np.array(state["integral"], dtype=float)
+        self._exp = np.array(state["exp"], dtype=float)
+        self._prev = np.array(state["prev"], dtype=float)
+
 
 class DirectMemory:
     """Direct Boltzmann sum for any creep function (e.g. tabulated): O(k·N) per step.
@@ -144,6 +151,15 @@ class DirectMemory:
                 w = float(np.asarray(self._w(k - n)))
             out = out + w * inc
         return out
+
+    def state(self) -> dict:
+        inc = np.stack(self._increments) if self._increments else np.zeros((0,) + self.shape)
+        return {"k": self.k, "increments": inc, "prev": self._prev}
+
+    def load_state(self, state) -> None:
+        self.k = int(state["k"])
+        self._increments = list(np.array(state["increments"], dtype=float))
+        self._prev = np.array(state["prev"], dtype=float)
 
     def commit(self, sigma: np.ndarray) -> None:
         sigma = np.asarray(sigma, dtype=float).reshape(self.shape)

@@ -59,7 +59,7 @@ def _n_steps(scene):
 
 
 def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None,
-             fft=None, threads=None, on_step=None):
+             fft=None, threads=None, on_step=None, resume=False, checkpoint_seconds=30.0):
     """Run one scene; return its labelled :class:`xarray.Dataset` (CONTRACT §3).
 
     Parameters
@@ -80,6 +80,14 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     on_step : callable, optional
         Called after every instant as ``on_step(k, t_k, record)`` with the instant's
         outputs (a dict of arrays and numbers, as written to the archive).
+    resume : bool
+        With ``path``: the run is resumable. Its part file (``.NAME.resumable.part``)
+        and a checkpoint (``.NAME.ckpt.npz``, every ``checkpoint_seconds``) stay beside the
+        target when the run is interrupted (Ctrl-C, a killed process); calling again with
+        ``resume=True`` continues from the last checkpoint of the same scene. Without a
+        checkpoint it starts from the beginning.
+    checkpoint_seconds : float
+        Wall time between checkpoints of a resumable run [s].
 
     Returns
     -------
@@ -158,11 +166,15 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     if accuracy_note:
         attrs["accuracy"] = accuracy_note
     out = scene.output
-    writer_cls = ArchiveWriter if path is not None else MemoryWriter
-    writer = writer_cls(path, x1, x2, fields + series, attrs, precision=out.precision,
-                        compress=out.compress) if path is not None else \
-        MemoryWriter(None, x1, x2, fields + series, attrs, precision=out.precision,
-                     compress=out.compress)
+    ckpt = _Checkpoint(path, scene) if (path is not None and resume) else None
+    state = ckpt.load() if ckpt is not None else None
+    if path is not None:
+        writer = ArchiveWriter(path, x1, x2, fields + series, attrs, precision=out.precision,
+                               compress=out.compress, resumable=resume,
+                               resume_steps=None if state is None else state["written"])
+    else:
+        writer = MemoryWriter(None, x1, x2, fields + series, attrs, precision=out.precision,
+                              compress=out.compress)
 
     p = np.zeros((n1, n2))
     q = np.zeros((2, n1, n2))
@@ -171,13 +183,23 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     omega = np.zeros(3)
     dissipation = 0.0
     last_normal = None
+    k_start = 0
+    if state is not None:
+        k_start = int(state["k"]) + 1
+        p, q, u, s = state["p"], state["q"], state["u"], state["s"]
+        omega, dissipation = np.array(state["omega"]), float(state["dissipation"])
+        for i, m in enumerate(mems):
+            if m is not None:
+                m.load_state({key[len(f"mem{i}_"):]: v for key, v in state.items()
+                              if key.startswith(f"mem{i}_")})
     stride = int(out.stride)
     bar = None
     if progress:
         from tqdm.auto import tqdm
-        bar = tqdm(total=t.size, desc=scene.name, unit="step")
+        bar = tqdm(total=t.size, initial=k_start, desc=scene.name, unit="step")
+    last_ckpt = _time.perf_counter()
     try:
-        for k in range(t.size):
+        for k in range(k_start, t.size):
             first = k == 0
             op = op_first if first else op_next
             pairs0 = conv.pairs
@@ -252,18 +274,66 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
                 on_step(k, float(t[k]), record)
             if bar is not None:
                 bar.update(1)
-    except BaseException:
-        if hasattr(writer, "abort"):
+            if ckpt is not None and _time.perf_counter() - last_ckpt > checkpoint_seconds:
+                writer.flush()
+                ckpt.save(k, writer.steps, p, q, u, s, omega, dissipation, mems)
+                last_ckpt = _time.perf_counter()
+    except KeyboardInterrupt:
+        if ckpt is not None:
+            writer.suspend()           # keep the part file and the last checkpoint
+        else:
             writer.abort()
+        raise
+    except BaseException:
+        writer.abort()
+        if ckpt is not None:
+            ckpt.remove()
         raise
     finally:
         if bar is not None:
             bar.close()
     final = {"wall_time_s": _time.perf_counter() - wall0}
     result = writer.close(final)
+    if ckpt is not None:
+        ckpt.remove()
     if path is not None:
         return open_archive(result)
     return result
+
+
+class _Checkpoint:
+    """The state of a resumable run after a completed instant (``.NAME.ckpt.npz``)."""
+
+    def __init__(self, path, scene):
+        import pathlib
+        self.path = pathlib.Path(path)
+        self.file = self.path.with_name(f".{self.path.name}.ckpt.npz")
+        self.digest = scene.digest()
+
+    def load(self):
+        from .archive import resumable_part
+        if not (self.file.exists() and resumable_part(self.path).exists()):
+            return None
+        with np.load(self.file) as z:
+            state = {k: z[k] for k in z.files}
+        if str(state.pop("digest")) != self.digest:
+            return None                  # another scene: start afresh
+        return state
+
+    def save(self, k, written, p, q, u, s, omega, dissipation, mems):
+        import os
+        arrays = {"digest": np.array(self.digest), "k": np.array(k),
+                  "written": np.array(written), "p": p, "q": q, "u": u, "s": s,
+                  "omega": omega, "dissipation": np.array(dissipation)}
+        for i, m in enumerate(mems):
+            if m is not None:
+                arrays.update({f"mem{i}_{key}": np.asarray(v) for key, v in m.state().items()})
+        tmp = self.file.with_name(self.file.name + ".tmp.npz")
+        np.savez(tmp, **arrays)
+        os.replace(tmp, self.file)
+
+    def remove(self):
+        self.file.unlink(missing_ok=True)
 
 
 def _frictionless(pl):
