@@ -1,0 +1,648 @@
+"""Standard figures of an archive or a sweep (PNG, matplotlib's Agg renderer).
+
+``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|all``.
+
+- :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
+  instants, the closed form in grey (as the paper's figures 2 and 3); pH, aH are the
+  Hertz peak pressure and contact radius of the scene with its instantaneous moduli.
+- :func:`plot_maps`: p, |q| and the stick/slip status at one instant, axes in mm.
+- :func:`plot_hysteresis`: the fretting loop T1 against omega1.
+- :func:`plot_radii`: contact and stick radii against time.
+- :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
+- :func:`standard_figures`: every figure that applies to an archive.
+
+Figures are made with :class:`matplotlib.figure.Figure` (never pyplot: no global state,
+no window), 8 x 5 in at 100 dpi (800 x 500 pixels), tight layout, and written atomically
+(a temporary file renamed onto the target). Every function returns the path written.
+"""
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import os
+import pathlib
+import secrets
+
+import numpy as np
+import xarray as xr
+
+from .compare import (ClosedForm, _grid, _radius, _scene_of, closed_form_for,
+                      closed_form_solution, load_dataset)
+from .exceptions import ArchiveError, ContactpipeError
+
+__all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
+           "standard_figures", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS"]
+
+FIGSIZE = (8.0, 5.0)        # in
+DPI = 100
+KINDS = ("profiles", "maps", "hysteresis", "radii")
+GREY = "0.6"
+GREY_WIDE = "0.78"          # a wide light line under the numerical one
+STATUS_COLOURS = ("#e6e6e6", "#2c7bb6", "#d7191c")     # separated, stick, slip
+
+
+# --------------------------------------------------------------------------- helpers
+
+def _figure(nrows=1, ncols=1, **kw):
+    from matplotlib.figure import Figure
+    fig = Figure(figsize=FIGSIZE, dpi=DPI)
+    axes = fig.subplots(nrows, ncols, squeeze=False, **kw)
+    return fig, axes
+
+
+def _save(fig, path) -> pathlib.Path:
+    """Tight layout, then write the PNG atomically."""
+    import warnings
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)     # tight layout on odd axes
+        fig.tight_layout()
+    tmp = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.part")
+    try:
+        fig.savefig(tmp, format="png", dpi=DPI)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return path
+
+
+def _open(ds):
+    ds, _ = load_dataset(ds)
+    return ds
+
+
+def _frictional(ds) -> bool:
+    return all(v in ds for v in ("q1", "T1", "omega1"))
+
+
+def _has_tangential_load(ds) -> bool:
+    return _frictional(ds) and bool(np.any(np.abs(np.asarray(ds["T1"].values)) > 0))
+
+
+def _window(ds):
+    """(t0, tau) [s]: the start and length of the load window."""
+    t = np.asarray(ds["time"].values, float)
+    try:
+        scene = _scene_of(ds)
+        tk = scene.load.knots()[0]
+        t0, tau = float(tk[0]), float(tk[-1] - tk[0])
+    except ArchiveError:
+        t0, tau = float(t[0]), float(t[-1] - t[0])
+    return t0, tau
+
+
+def _time_label(ds, k):
+    t0, tau = _window(ds)
+    t = float(ds["time"].values[k])
+    if tau > 0:
+        return f"t/τ = {(t - t0) / tau:.3g}"
+    return f"t = {t:.3g} s"
+
+
+def _scales(ds):
+    """(pH [Pa], aH [m], names): Hertz peak pressure and radius with instantaneous moduli.
+
+    Sphere: Hertz; ellipsoid: p0 and the semi-axis along x1; flat punch: the mean
+    pressure W / (pi a^2) and the punch radius; a surface: the largest pressure and the
+    radius of the largest contact area.
+    """
+    from . import analytic
+    from .materials import composite_modulus
+    try:
+        scene = _scene_of(ds)
+    except ArchiveError:
+        scene = None
+    if scene is not None and scene.geometry.shape != "surface":
+        W = float(np.max(scene.load.knots()[1]))
+        b1, b2 = scene.indenter.body(), scene.halfspace.body()
+        phi = [b.creep.phi0 if b.kind == "viscoelastic" and b.creep.phi0 > 0 else 1.0
+               for b in (b1, b2)]
+        e_star = composite_modulus(b1, b2, *phi)
+        geo = scene.geometry
+        if geo.shape == "flat_punch":
+            a = geo.radius
+            return W / (math.pi * a * a), a, ("p_m", "a")
+        if np.isfinite(e_star):
+            if geo.shape == "sphere":
+                h = analytic.hertz_sphere(W, geo.radius, e_star)
+                return h.max_pressure, h.contact_radius, ("p_H", "a_H")
+            h = analytic.hertz_ellipsoid(W, geo.radii, e_star)
+            return h.max_pressure, h.semi_axes[0], ("p_H", "a_H")
+    pmax = float(ds["p"].max())
+    amax = _radius(float(ds["contact_area"].max()))
+    return (pmax if pmax > 0 else 1.0), (amax if amax > 0 else 1.0), ("p_max", "a_max")
+
+
+def _centre_rows(x2):
+    """Indices of the row(s) through the centre: the one with x2 = 0, or for an even
+    grid the two middle rows (x2 nearest 0), averaged."""
+    ax = np.abs(np.asarray(x2, float))
+    m = ax.min()
+    return np.flatnonzero(ax <= m * (1 + 1e-9) + 1e-15)
+
+
+def _profile(da, k, rows):
+    """A field's profile along x1 through the centre at instant k."""
+    return np.asarray(da.isel(time=k, x2=rows).values, float).reshape(da.sizes["x1"], -1) \
+        .mean(axis=1)
+
+
+def _index(ds, instant) -> int:
+    """An instant as an index: an int (negative from the end) or a time [s] (a float,
+    the nearest instant)."""
+    n = ds.sizes["time"]
+    if isinstance(instant, (bool, np.bool_)) or not isinstance(
+            instant, (int, np.integer, float, np.floating)):
+        raise ValueError(f"instant {instant!r}: expected an index (int) or a time [s] "
+                         f"(float)")
+    if isinstance(instant, (float, np.floating)):
+        t = np.asarray(ds["time"].values, float)
+        return int(np.argmin(np.abs(t - float(instant))))
+    k = int(instant)
+    if not -n <= k < n:
+        raise ValueError(f"instant {k} is out of range: the archive has {n} instants "
+                         f"(0 to {n - 1}, or negative from the end)")
+    return k % n
+
+
+def _default_instants(ds, count=5):
+    """About ``count`` instants spread over the run, the turning points of T1 and the
+    last instant included (an unloaded first instant, with no shear, is left out)."""
+    n = ds.sizes["time"]
+    if n <= count:
+        return list(range(n))
+    chosen = {n - 1}
+    shear_from_zero = False
+    if "T1" in ds:
+        T = np.asarray(ds["T1"].values, float)
+        d = np.sign(np.diff(T))
+        turning = [i for i in range(1, n - 1) if d[i - 1] != 0 and d[i] != 0
+                   and d[i] != d[i - 1]]
+        if len(turning) >= count:
+            turning = [turning[int(j)] for j in
+                       np.linspace(0, len(turning) - 1, count - 1).round()]
+        chosen.update(turning)
+        shear_from_zero = bool(np.any(T != 0)) and T[0] == 0
+    grid = np.linspace(0, n - 1, count + 1)[1:] if shear_from_zero else \
+        np.linspace(0, n - 1, count)
+    candidates = sorted(set(int(k) for k in grid.round()) - chosen)
+    while len(chosen) < count and candidates:      # the candidate farthest from the rest
+        best = max(candidates, key=lambda c: min(abs(c - k) for k in chosen))
+        chosen.add(best)
+        candidates.remove(best)
+    return sorted(chosen)
+
+
+def _solution(ds) -> ClosedForm | None:
+    """The closed form to draw in grey, or None (none applies, or it cannot be built)."""
+    try:
+        if closed_form_for(ds) is None:
+            return None
+        return closed_form_solution(ds)
+    except (ContactpipeError, ValueError):
+        return None
+
+
+# --------------------------------------------------------------------------- profiles
+
+def _profiles_figure(ds, path, instants=None, *, closed_form=True, reference=None):
+    """The profiles figure; ``reference`` (a Dataset) is drawn in grey instead of the
+    closed form, at the instants nearest in t_norm."""
+    ds = _open(ds)
+    if instants is None:
+        ks = _default_instants(ds)
+    elif isinstance(instants, (int, np.integer, float, np.floating)):
+        ks = [_index(ds, instants)]
+    else:
+        ks = [_index(ds, i) for i in instants]
+    pH, aH, (pn, an) = _scales(ds)
+    x1, x2, _, _ = _grid(ds)
+    rows = _centre_rows(x2)
+    x2_row = float(np.mean(np.abs(x2[rows])))
+    shear = "q1" in ds
+    fig, axes = _figure(2 if shear else 1, 1, sharex=True)
+    ax_p = axes[0, 0]
+    ax_q = axes[1, 0] if shear else None
+    sol = _solution(ds) if (closed_form and reference is None) else None
+    xf = np.linspace(x1[0], x1[-1], 601)
+    colours = [f"C{i % 10}" for i in range(len(ks))]
+    ref_rows = ref_t = None
+    if reference is not None:
+        reference = _open(reference)
+        ref_rows = _centre_rows(reference["x2"].values)
+        tr = np.asarray(reference["time"].values, float)
+        ref_t = (tr - tr[0]) / (tr[-1] - tr[0]) if tr[-1] > tr[0] else np.zeros_like(tr)
+    t_all = np.asarray(ds["time"].values, float)
+    span = t_all[-1] - t_all[0]
+    for k, c in zip(ks, colours):
+        label = _time_label(ds, k)
+        ax_p.plot(x1 / aH, _profile(ds["p"], k, rows) / pH, "o-", ms=3, lw=1.2, color=c,
+                  label=label)
+        if shear:
+            ax_q.plot(x1 / aH, _profile(ds["q1"], k, rows) / pH, "o-", ms=3, lw=1.2,
+                      color=c, label=label)
+        if sol is not None:
+            with np.errstate(all="ignore"):
+                if sol.has_field_pressure():
+                    pc = sol.pressure(k, xf, x2_row) / pH
+                    pc = np.where(np.isfinite(pc), pc, np.nan)
+                    ax_p.plot(xf / aH, pc, "-", color=GREY, lw=1.0, zorder=0)
+                if shear:
+                    ax_q.plot(xf / aH, sol.shear(k, xf, x2_row) / pH, "-", color=GREY,
+                              lw=1.0, zorder=0)
+        if reference is not None:
+            tn = (t_all[k] - t_all[0]) / span if span > 0 else 0.0
+            j = int(np.argmin(np.abs(ref_t - tn)))
+            xr1 = np.asarray(reference["x1"].values, float)
+            ax_p.plot(xr1 / aH, _profile(reference["p"], j, ref_rows) / pH, "-",
+                      color=GREY, lw=1.0, zorder=0)
+            if shear and "q1" in reference:
+                ax_q.plot(xr1 / aH, _profile(reference["q1"], j, ref_rows) / pH, "-",
+                          color=GREY, lw=1.0, zorder=0)
+    grey_label = None
+    if sol is not None:
+        grey_label = f"closed form ({sol.name.replace('_', '-')})"
+    elif reference is not None:
+        grey_label = "reference archive"
+    if grey_label:
+        for ax in (ax_p, ax_q) if shear else (ax_p,):
+            ax.plot([], [], "-", color=GREY, label=grey_label)
+    if sol is not None and sol.name == "flat_punch":
+        top = float(np.max(ds["p"].isel(time=ks).values)) / pH
+        ax_p.set_ylim(0.0, 1.3 * top if top > 0 else 1.0)
+    ax_p.set_ylabel(f"p / {pn}")
+    ax_p.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
+    title = (f"{_scene_title(ds)}: profiles along x1 through the centre "
+             f"({pn} = {pH / 1e9:.4g} GPa, {an} = {aH * 1e3:.4g} mm)")
+    ax_p.set_title(title, fontsize=9)
+    ax_p.legend(fontsize=7, ncol=2, loc="lower center")
+    last = ax_p
+    if shear:
+        ax_q.set_ylabel(f"q1 / {pn}")
+        ax_q.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
+        last = ax_q
+    last.set_xlabel(f"x1 / {an}")
+    for ax in (ax_p, ax_q) if shear else (ax_p,):
+        ax.grid(True, lw=0.3, alpha=0.5)
+    return _save(fig, path)
+
+
+def _scene_title(ds) -> str:
+    try:
+        return _scene_of(ds).name
+    except ArchiveError:
+        return str(ds.attrs.get("title", "archive"))
+
+
+def plot_profiles(ds, path, instants=None, *, closed_form=True) -> pathlib.Path:
+    """p/pH and q1/pH against x1/aH through the centre, at a few instants.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset or path
+        An archive.
+    path : path
+        The PNG to write.
+    instants : int, float or sequence, optional
+        Indices (int, negative from the end) or times [s] (float, the nearest instant).
+        Default: about five instants spread over the run, the turning points of T1
+        included.
+    closed_form : bool
+        Draw the closed form in grey where :func:`contactpipe.compare.closed_form_for`
+        gives one.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``. pH, aH are the Hertz peak pressure and contact radius with the scene's
+        instantaneous moduli (flat punch: mean pressure and punch radius). An even grid
+        has no centre row: the two middle rows are averaged.
+    """
+    return _profiles_figure(ds, path, instants, closed_form=closed_form)
+
+
+# --------------------------------------------------------------------------- maps
+
+def _prefixed(value):
+    """(factor, unit) to show a stress of magnitude ``value`` [Pa]."""
+    for factor, unit in ((1e9, "GPa"), (1e6, "MPa"), (1e3, "kPa")):
+        if abs(value) >= factor:
+            return factor, unit
+    return 1.0, "Pa"
+
+
+def plot_maps(ds, path, instant=-1) -> pathlib.Path:
+    """Maps of p, |q| and the contact status at one instant, axes in mm.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset or path
+    path : path
+        The PNG to write.
+    instant : int or float
+        Index (negative from the end) or time [s]; default the last instant.
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+    ds = _open(ds)
+    k = _index(ds, instant)
+    x1, x2, d1, d2 = _grid(ds)
+    extent = [(x1[0] - d1 / 2) * 1e3, (x1[-1] + d1 / 2) * 1e3,
+              (x2[0] - d2 / 2) * 1e3, (x2[-1] + d2 / 2) * 1e3]
+    fig, axes = _figure(1, 3)
+    p = np.asarray(ds["p"].isel(time=k).values, float)
+    f, unit = _prefixed(float(p.max()))
+    im = axes[0, 0].imshow(p.T / f, origin="lower", extent=extent, cmap="viridis",
+                           interpolation="nearest")
+    fig.colorbar(im, ax=axes[0, 0], fraction=0.046, pad=0.04, label=f"p [{unit}]")
+    axes[0, 0].set_title("pressure p", fontsize=9)
+    ax = axes[0, 1]
+    if "q1" in ds:
+        q = np.hypot(np.asarray(ds["q1"].isel(time=k).values, float),
+                     np.asarray(ds["q2"].isel(time=k).values, float) if "q2" in ds else 0.0)
+        fq, uq = _prefixed(float(q.max()) if q.max() > 0 else float(p.max()))
+        im = ax.imshow(q.T / fq, origin="lower", extent=extent, cmap="magma",
+                       interpolation="nearest")
+        fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=f"|q| [{uq}]")
+        ax.set_title("shear traction |q|", fontsize=9)
+    else:
+        ax.imshow(np.zeros((x2.size, x1.size)), origin="lower", extent=extent,
+                  cmap="Greys", vmin=0, vmax=1, interpolation="nearest")
+        ax.text(0.5, 0.5, "frictionless:\nno shear", transform=ax.transAxes,
+                ha="center", va="center", fontsize=9)
+        ax.set_title("shear traction |q|", fontsize=9)
+    ax = axes[0, 2]
+    status = np.asarray(ds["status"].isel(time=k).values, float)
+    cmap = ListedColormap(STATUS_COLOURS)
+    norm = BoundaryNorm([-0.5, 0.5, 1.5, 2.5], cmap.N)
+    ax.imshow(status.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
+              interpolation="nearest")
+    mu = None
+    try:
+        mu = float(_scene_of(ds).friction.mu)
+    except ArchiveError:
+        pass
+    names = ("separated", "stick", "slip") if mu != 0 else \
+        ("separated", "stick", "contact (frictionless)")
+    present = set(np.unique(status).astype(int).tolist())
+    handles = [Patch(facecolor=c, edgecolor="0.4", lw=0.5, label=n)
+               for i, (c, n) in enumerate(zip(STATUS_COLOURS, names)) if i in present or i == 0]
+    ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2),
+              ncol=len(handles), frameon=False, handlelength=1.0, columnspacing=0.8)
+    ax.set_title("status", fontsize=9)
+    for a in axes[0]:
+        a.set_xlabel("x1 [mm]")
+        a.set_aspect("equal")
+        a.tick_params(labelsize=7)
+    axes[0, 0].set_ylabel("x2 [mm]")
+    t = float(ds["time"].values[k])
+    fig.suptitle(f"{_scene_title(ds)} at t = {t:.4g} s ({_time_label(ds, k)})", fontsize=10)
+    return _save(fig, path)
+
+
+# --------------------------------------------------------------------------- series
+
+def _require_frictional(ds, what):
+    if not _frictional(ds):
+        raise ArchiveError(f"{what} needs a frictional archive (variables T1, omega1, q1); "
+                           f"this one is frictionless (models: "
+                           f"{ds.attrs.get('models', '?')})")
+
+
+def plot_hysteresis(ds, path) -> pathlib.Path:
+    """The fretting loop: T1 [N] against omega1 [um], closed form in grey (MD).
+
+    Raises
+    ------
+    ArchiveError
+        The archive is frictionless (no T1, omega1).
+    """
+    ds = _open(ds)
+    _require_frictional(ds, "the hysteresis loop")
+    fig, axes = _figure()
+    ax = axes[0, 0]
+    om = np.asarray(ds["omega1"].values, float)
+    T = np.asarray(ds["T1"].values, float)
+    sol = _solution(ds)
+    loop = sol.loop() if sol is not None else None
+    if loop is not None:
+        ax.plot(loop[1] * 1e6, loop[0], "-", color=GREY_WIDE, lw=4.0, zorder=0,
+                label="closed form (Mindlin-Deresiewicz)")
+    ax.plot(om * 1e6, T, "o-", ms=3, lw=1.2, color="C0", label="numerical")
+    ax.set_xlabel("omega1 [µm]")
+    ax.set_ylabel("T1 [N]")
+    ax.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
+    ax.axvline(0.0, color="0.85", lw=0.6, zorder=-1)
+    if "dissipation" in ds:
+        ax.set_title(f"{_scene_title(ds)}: tangential force against rigid displacement "
+                     f"(dissipated {float(ds['dissipation'].values[-1]):.4g} J)", fontsize=9)
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.legend(fontsize=8)
+    return _save(fig, path)
+
+
+def plot_radii(ds, path) -> pathlib.Path:
+    """Contact radius sqrt(A/pi) and stick radius sqrt(A_stick/pi) [mm] against time [s],
+    closed forms in grey where they apply."""
+    ds = _open(ds)
+    fig, axes = _figure()
+    ax = axes[0, 0]
+    t = np.asarray(ds["time"].values, float)
+    a = np.sqrt(np.asarray(ds["contact_area"].values, float) / math.pi)
+    ax.plot(t, a * 1e3, "o-", ms=3, color="C0", label="contact radius")
+    if "stick_area" in ds:
+        c = np.sqrt(np.asarray(ds["stick_area"].values, float) / math.pi)
+        ax.plot(t, c * 1e3, "s-", ms=3, color="C3", label="stick radius")
+    sol = _solution(ds)
+    if sol is not None:
+        n = t.size
+        ax.plot(t, [sol.contact_radius(k) * 1e3 for k in range(n)], "-", color=GREY_WIDE,
+                lw=4.0, zorder=0, label=f"closed form ({sol.name.replace('_', '-')})")
+        if sol.name == "mindlin_deresiewicz":
+            ax.plot(t, [sol.stick_radius(k) * 1e3 for k in range(n)], "-", color=GREY_WIDE,
+                    lw=4.0, zorder=0)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("radius [mm]")
+    ax.set_ylim(bottom=0.0)
+    ax.set_title(f"{_scene_title(ds)}: radii of the circles of equal area", fontsize=9)
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.legend(fontsize=8)
+    return _save(fig, path)
+
+
+# --------------------------------------------------------------------------- sweeps
+
+BASE_DIMS = ("time", "t_norm", "x1", "x2")
+MAX_LEGEND = 20             # more members than this: no legend
+
+
+def _member_label(sw, sel) -> str:
+    """'mu = 0.1, tau_ratio = 2' for one member: the coordinates along each looped
+    dimension (the dimension's own, or those along it in a zip sweep; not the digest)."""
+    parts = []
+    for d, i in sel.items():
+        names = [c for c, v in sw.coords.items()
+                 if v.dims == (d,) and c != "digest" and (c == d or c not in sw.dims)]
+        names.sort(key=lambda c: c != d)
+        if not names:
+            parts.append(f"{d} = {i}")
+        parts += [f"{c} = {_value_text(sw[c].values[i])}" for c in names]
+    return ", ".join(parts) or "sweep"
+
+
+def _value_text(v):
+    v = v.item() if hasattr(v, "item") else v
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def plot_sweep(sw, path, variable="contact_area", x="time") -> pathlib.Path:
+    """One curve of ``variable`` per member of a combined sweep Dataset.
+
+    Parameters
+    ----------
+    sw : xarray.Dataset or path
+        A sweep (:func:`contactpipe.open_sweep`): archives combined along one dimension
+        per swept parameter; the dimensions beyond time/t_norm/x1/x2 are looped over
+        (all their combinations).
+    path : path
+        The PNG to write.
+    variable : str
+        A series (over time). A field is reduced to its largest value over x1, x2.
+    x : str
+        The abscissa; ``"time"`` uses ``t_norm`` when the sweep has it (members with
+        different windows are aligned on it).
+
+    Raises
+    ------
+    ArchiveError
+        ``variable`` or ``x`` is not in the sweep.
+    """
+    if not isinstance(sw, xr.Dataset):
+        sw = _open_sweep(sw)
+    if variable not in sw:
+        raise ArchiveError(f"variable {variable!r} is not in the sweep; it has: "
+                           f"{', '.join(sorted(map(str, sw.data_vars)))}")
+    da = sw[variable]
+    reduced = [d for d in ("x1", "x2") if d in da.dims]
+    if reduced:
+        da = da.max(reduced)
+    has_t_norm = "t_norm" in sw.coords or "t_norm" in sw.dims
+    xname = "t_norm" if (x == "time" and has_t_norm) else x
+    if xname not in sw.coords and xname not in sw.dims and xname not in sw:
+        raise ArchiveError(f"x = {x!r} is not a coordinate of the sweep")
+    extra = [d for d in da.dims if d not in BASE_DIMS]
+    fig, axes = _figure()
+    ax = axes[0, 0]
+    combos = list(itertools.product(*[range(da.sizes[d]) for d in extra])) if extra else [()]
+    xs_all = sw[xname] if xname in sw.variables else None
+    for n, combo in enumerate(combos):
+        sel = dict(zip(extra, combo))
+        y = da.isel(sel) if sel else da
+        if xs_all is not None:
+            xv = xs_all.isel({d: i for d, i in sel.items() if d in xs_all.dims})
+        else:
+            xv = y[xname]
+        xv = np.asarray(xv.values, float).ravel()
+        yv = np.asarray(y.values, float).ravel()
+        if xv.size != yv.size:
+            raise ArchiveError(f"x = {xname!r} does not run along {variable!r} "
+                               f"({xv.size} values against {yv.size})")
+        label = _member_label(sw, sel)
+        ax.plot(xv, yv, "-", marker="o" if yv.size <= 30 else None, ms=3, lw=1.2,
+                color=f"C{n % 10}", label=label)
+    from .nomenclature import VARIABLES
+    known = VARIABLES.get(variable, {})
+    units = sw[variable].attrs.get("units", known.get("units", ""))
+    long = sw[variable].attrs.get("long_name", known.get("long_name", variable))
+    ylab = f"{'max ' if reduced else ''}{variable}" + (f" ({long})" if long != variable else "") \
+        + (f" [{units}]" if units and units != "1" else "")
+    ax.set_ylabel(ylab, fontsize=9)
+    xunits = sw[xname].attrs.get("units", "") if xname in sw.variables else ""
+    if xname == "t_norm":
+        ax.set_xlabel("t / τ (dimensionless time)")
+    else:
+        ax.set_xlabel(f"{xname}" + (f" [{xunits}]" if xunits else ""))
+    ax.grid(True, lw=0.3, alpha=0.5)
+    if len(combos) <= MAX_LEGEND:
+        ax.legend(fontsize=7, ncol=1 if len(combos) <= 8 else 2)
+    ax.set_title(f"sweep over {', '.join(extra) if extra else '(no axis)'}: {variable} "
+                 f"({len(combos)} members)", fontsize=9)
+    return _save(fig, path)
+
+
+def _open_sweep(path):
+    try:
+        from .sweep import open_sweep
+    except ImportError as err:            # pragma: no cover - the sweep stage is optional
+        raise ArchiveError(f"{path}: cannot open a sweep ({err})") from None
+    return open_sweep(path)
+
+
+# --------------------------------------------------------------------------- all
+
+def _standard(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
+    ds = _open(ds)
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = [plot_profiles(ds, out_dir / f"{prefix}profiles.png"),
+             plot_maps(ds, out_dir / f"{prefix}maps.png", instant)]
+    if _has_tangential_load(ds):
+        paths.append(plot_hysteresis(ds, out_dir / f"{prefix}hysteresis.png"))
+    paths.append(plot_radii(ds, out_dir / f"{prefix}radii.png"))
+    return paths
+
+
+def standard_figures(ds, out_dir, prefix="") -> list[pathlib.Path]:
+    """Every figure that applies to an archive, written into ``out_dir``.
+
+    ``<prefix>profiles.png`` and ``<prefix>maps.png`` always, ``<prefix>hysteresis.png``
+    for a frictional archive with a tangential load, ``<prefix>radii.png`` always.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in that order.
+    """
+    return _standard(ds, out_dir, prefix)
+
+
+# --------------------------------------------------------------------------- CLI
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("archive", type=pathlib.Path,
+                        help="archive (netCDF), or a sweep folder")
+    parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
+                        help="the PNG to write (a folder with --kind all)")
+    parser.add_argument("--kind", choices=KINDS + ("all",), default="profiles",
+                        help="which figure (default: profiles)")
+    parser.add_argument("--instant", type=int, default=None,
+                        help="instant index K (negative from the end): the one profile "
+                             "or map shown")
+    parser.add_argument("--variable", default="contact_area",
+                        help="sweep folder only: the series to plot (default contact_area)")
+
+
+def main(args) -> int:
+    if args.archive.is_dir():
+        written = [plot_sweep(_open_sweep(args.archive), args.output, args.variable)]
+    elif args.kind == "all":
+        written = _standard(args.archive, args.output, "",
+                            -1 if args.instant is None else args.instant)
+    elif args.kind == "profiles":
+        written = [plot_profiles(args.archive, args.output,
+                                 None if args.instant is None else [args.instant])]
+    elif args.kind == "maps":
+        written = [plot_maps(args.archive, args.output,
+                             -1 if args.instant is None else args.instant)]
+    elif args.kind == "hysteresis":
+        written = [plot_hysteresis(args.archive, args.output)]
+    else:
+        written = [plot_radii(args.archive, args.output)]
+    for path in written:
+        print(f"wrote {path}")
+    return 0

@@ -1,0 +1,173 @@
+"""The plotting stage: every figure is a PNG of the expected pixel size; the standard set
+follows the archive; sweeps plot one curve per member; the CLI."""
+import numpy as np
+import pytest
+import xarray as xr
+from matplotlib.image import imread
+
+import contactpipe as cp
+from contactpipe import plot
+from contactpipe.cli import main as cli_main
+from contactpipe.exceptions import ArchiveError
+
+from conftest import fretting_scene
+
+SHAPE = (500, 800, 4)      # 8 x 5 in at 100 dpi, RGBA
+
+
+def creep_scene():
+    """tiny-creep: a rigid sphere on a Maxwell half-space, frictionless, step load."""
+    return cp.Scene(
+        name="tiny-creep",
+        geometry={"shape": "sphere", "radius": 0.018},
+        indenter={"material": "rigid"},
+        halfspace={"material": "viscoelastic", "young": 105e9, "poisson": 0.3,
+                   "creep": "maxwell", "relaxation_time": 1.0},
+        load={"time": [0.0, 1.0], "normal_force": 1000.0},
+        grid={"points": [24, 24], "size": [2.4e-3, 2.4e-3]},
+        time={"steps": 10})
+
+
+def visco_fretting_scene():
+    """tiny-fretting: rigid sphere on a compressible Maxwell body, a fretting loop."""
+    return creep_scene().replace({
+        "name": "tiny-fretting", "friction.mu": 0.1,
+        "load.time": [0.0, 0.2, 0.6, 1.0],
+        "load.tangential_force": [0.0, 90.0, -90.0, 90.0],
+        "grid.size": [2.0e-3, 2.0e-3], "time.steps": 20})
+
+
+@pytest.fixture(scope="module")
+def archives(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("plot")
+    return {
+        "md": cp.simulate(fretting_scene(n=32, steps=20), folder / "md.nc"),
+        "fretting": cp.simulate(visco_fretting_scene(), folder / "fretting.nc"),
+        "creep": cp.simulate(creep_scene(), folder / "creep.nc"),
+        "folder": folder,
+    }
+
+
+def check_png(path):
+    assert path.exists() and path.stat().st_size > 5_000, path
+    image = imread(path)
+    assert image.shape == SHAPE, (path, image.shape)
+    assert image[..., :3].std() > 0.01, "a blank figure"
+
+
+@pytest.mark.parametrize("kind", ["md", "fretting", "creep"])
+def test_profiles(archives, tmp_path, kind):
+    path = plot.plot_profiles(archives[kind], tmp_path / "p.png")
+    assert path == tmp_path / "p.png"
+    check_png(path)
+
+
+def test_profiles_instants(archives, tmp_path):
+    ds = archives["md"]
+    check_png(plot.plot_profiles(ds, tmp_path / "a.png", instants=[4, -1]))
+    check_png(plot.plot_profiles(ds, tmp_path / "b.png", instants=[0.6], closed_form=False))
+    with pytest.raises(ValueError, match="out of range"):
+        plot.plot_profiles(ds, tmp_path / "c.png", instants=[99])
+
+
+def test_default_instants_include_turning_points(archives):
+    # 20 steps over [0, 1]: T1 turns at t = 0.2 (k = 4) and t = 0.6 (k = 12)
+    ks = plot._default_instants(archives["md"])
+    assert {4, 12, 20} <= set(ks) and len(ks) == 5 and 0 not in ks
+    assert plot._default_instants(archives["creep"]) == [0, 2, 5, 8, 10]
+
+
+def test_centre_rows():
+    assert list(plot._centre_rows(np.array([-1.5, -0.5, 0.5, 1.5]))) == [1, 2]
+    assert list(plot._centre_rows(np.array([-1.0, 0.0, 1.0]))) == [1]
+
+
+@pytest.mark.parametrize("kind", ["fretting", "creep"])
+def test_maps(archives, tmp_path, kind):
+    check_png(plot.plot_maps(archives[kind], tmp_path / "m.png"))
+
+
+def test_maps_instant(archives, tmp_path):
+    check_png(plot.plot_maps(archives["md"], tmp_path / "m.png", instant=3))
+    with pytest.raises(ValueError, match="out of range"):
+        plot.plot_maps(archives["md"], tmp_path / "x.png", instant=-50)
+
+
+def test_hysteresis(archives, tmp_path):
+    check_png(plot.plot_hysteresis(archives["md"], tmp_path / "h.png"))
+    check_png(plot.plot_hysteresis(archives["folder"] / "fretting.nc", tmp_path / "v.png"))
+    with pytest.raises(ArchiveError, match="frictionless"):
+        plot.plot_hysteresis(archives["creep"], tmp_path / "no.png")
+    assert not (tmp_path / "no.png").exists()
+
+
+@pytest.mark.parametrize("kind", ["md", "creep"])
+def test_radii(archives, tmp_path, kind):
+    check_png(plot.plot_radii(archives[kind], tmp_path / "r.png"))
+
+
+def test_standard_figures(archives, tmp_path):
+    frictional = plot.standard_figures(archives["fretting"], tmp_path / "f", prefix="run_")
+    assert [p.name for p in frictional] == ["run_profiles.png", "run_maps.png",
+                                            "run_hysteresis.png", "run_radii.png"]
+    frictionless = plot.standard_figures(archives["creep"], tmp_path / "c")
+    assert [p.name for p in frictionless] == ["profiles.png", "maps.png", "radii.png"]
+    for p in frictional + frictionless:
+        check_png(p)
+    assert sorted(x.name for x in (tmp_path / "c").iterdir()) == \
+        ["maps.png", "profiles.png", "radii.png"]          # nothing else, no .part
+
+
+def test_sweep_along_mu(tmp_path):
+    members = [cp.simulate(fretting_scene(n=16, steps=6, size=4.0, mu=mu))
+               for mu in (0.1, 0.12, 0.15)]
+    sw = xr.concat(members, dim=xr.DataArray([0.1, 0.12, 0.15], dims="mu", name="mu"),
+                   combine_attrs="drop_conflicts")
+    check_png(plot.plot_sweep(sw, tmp_path / "s.png"))
+    assert plot._member_label(sw, {"mu": 1}) == "mu = 0.12"
+    check_png(plot.plot_sweep(sw, tmp_path / "d.png", variable="dissipation"))
+    check_png(plot.plot_sweep(sw, tmp_path / "p.png", variable="p"))     # max over x1, x2
+    with pytest.raises(ArchiveError, match="not in the sweep"):
+        plot.plot_sweep(sw, tmp_path / "x.png", variable="nope")
+
+
+def test_sweep_on_t_norm(archives, tmp_path):
+    """Members with different windows, aligned on t_norm, each keeping its own time."""
+    members = []
+    for ds in (archives["creep"], archives["creep"]):
+        t = ds["time"].values
+        members.append(ds.assign_coords(t_norm=("time", (t - t[0]) / (t[-1] - t[0])))
+                       .swap_dims(time="t_norm"))
+    members[1] = members[1].assign_coords(time=("t_norm", 2 * members[1]["time"].values))
+    sw = xr.concat(members, dim=xr.DataArray([1.0, 2.0], dims="tau_ratio"),
+                   combine_attrs="drop_conflicts")
+    assert sw["time"].ndim == 2
+    check_png(plot.plot_sweep(sw, tmp_path / "t.png"))
+    # a zip sweep: one dimension "member", the axes as coordinates along it
+    zipped = sw.rename(tau_ratio="member").drop_vars("member").assign_coords(
+        tau_ratio=("member", [1.0, 2.0]), mu=("member", [0.0, 0.1]))
+    label = plot._member_label(zipped, {"member": 1})
+    assert sorted(label.split(", ")) == ["mu = 0.1", "tau_ratio = 2"]
+    check_png(plot.plot_sweep(zipped, tmp_path / "z.png", variable="W"))
+
+
+def test_cli_plot(archives, tmp_path, capsys):
+    path = str(archives["folder"] / "fretting.nc")
+    assert cli_main(["plot", path, "-o", str(tmp_path / "p.png")]) == 0
+    check_png(tmp_path / "p.png")
+    creep = str(archives["folder"] / "creep.nc")
+    assert cli_main(["plot", creep, "-o", str(tmp_path / "all"), "--kind", "all"]) == 0
+    assert sorted(p.name for p in (tmp_path / "all").iterdir()) == \
+        ["maps.png", "profiles.png", "radii.png"]
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_cli_plot_errors(archives, tmp_path, capsys):
+    status = cli_main(["plot", str(tmp_path / "absent.nc"), "-o", str(tmp_path / "x.png")])
+    err = capsys.readouterr().err
+    assert status != 0 and len(err.strip().splitlines()) == 1
+    assert "no such archive" in err
+    creep = str(archives["folder"] / "creep.nc")
+    status = cli_main(["plot", creep, "-o", str(tmp_path / "h.png"), "--kind", "hysteresis"])
+    err = capsys.readouterr().err
+    assert status != 0 and "frictionless" in err and len(err.strip().splitlines()) == 1
