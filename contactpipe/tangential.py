@@ -117,20 +117,8 @@ def _restore_vector(q, rho, target, stick):
 
 
 def _vector_cg(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
-    """Full vector form by projected CG (the fast path of :func:`solve_vector`).
-
-    Parameters
-    ----------
-    op : ContactOperator
-        Provides ``tangential_vector`` ([K11 K12; K21 K22] ⊛ q).
-    b : ndarray (2, N1, N2)
-        Known in-plane displacement minus the previous one [m].
-    bound : ndarray (N1, N2)
-        μp [Pa].
-    T : array_like (2,)
-        Tangential force [N].
-    q0 : ndarray (2, N1, N2)
-        Warm start [Pa].
+    """Full vector form by projected CG (the fast path of :func:`solve_vector`, same
+    parameters).
 
     Notes
     -----

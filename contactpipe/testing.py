@@ -17,7 +17,70 @@ import tomllib
 
 import numpy as np
 
-__all__ = ["contact_law_violations", "assert_contact_laws"]
+__all__ = ["contact_law_violations", "assert_contact_laws", "tiny_scene", "TINY_SCENES"]
+
+#: Two tiny scenes (24 x 24 cells, a rigid sphere on a compressible Maxwell half-space):
+#: "creep" is frictionless under a constant load; "fretting" runs every sub-model
+#: (tangential, coupling, memory) over a fretting loop. Each simulates in well under a second.
+TINY_SCENES = {
+    "creep": """
+name = "tiny-creep"
+[geometry]
+shape = "sphere"
+radius = 0.018
+[indenter]
+material = "rigid"
+[halfspace]
+material = "viscoelastic"
+young = 105e9
+poisson = 0.3
+creep = "maxwell"
+relaxation_time = 1.0
+[friction]
+mu = 0.0
+[load]
+time = [0.0, 1.0]
+normal_force = 1000.0
+[grid]
+points = [24, 24]
+size = [2.4e-3, 2.4e-3]
+[time]
+steps = 10
+""",
+    "fretting": """
+name = "tiny-fretting"
+[geometry]
+shape = "sphere"
+radius = 0.018
+[indenter]
+material = "rigid"
+[halfspace]
+material = "viscoelastic"
+young = 105e9
+poisson = 0.3
+creep = "maxwell"
+relaxation_time = 1.0
+[friction]
+mu = 0.1
+[load]
+time = [0.0, 0.2, 0.6, 1.0]
+normal_force = 1000.0
+tangential_force = [0.0, 90.0, -90.0, 90.0]
+[grid]
+points = [24, 24]
+size = [2.0e-3, 2.0e-3]
+[time]
+steps = 20
+""",
+}
+
+
+def tiny_scene(kind="fretting", **changes):
+    """A tiny scene for tests (:data:`TINY_SCENES`), with optional dotted-path changes:
+    ``tiny_scene("fretting", **{"time.steps": 40})``."""
+    from .scene import Scene
+    scene = Scene.from_toml_text(TINY_SCENES[kind])
+    return scene.replace(changes) if changes else scene
 
 
 def contact_law_violations(ds, rtol=1e-9, rtol_coulomb=1e-9) -> list[str]:

@@ -9,32 +9,9 @@ import time
 import numpy as np
 
 import contactpipe as cp
+from contactpipe.testing import TINY_SCENES
 
-SCENE = textwrap.dedent("""
-    name = "resume"
-    [geometry]
-    shape = "sphere"
-    radius = 0.018
-    [indenter]
-    material = "rigid"
-    [halfspace]
-    material = "viscoelastic"
-    young = 105e9
-    poisson = 0.3
-    creep = "maxwell"
-    relaxation_time = 1.0
-    [friction]
-    mu = 0.1
-    [load]
-    time = [0.0, 0.2, 0.6, 1.0]
-    normal_force = 1000.0
-    tangential_force = [0.0, 90.0, -90.0, 90.0]
-    [grid]
-    points = [24, 24]
-    size = [2.0e-3, 2.0e-3]
-    [time]
-    steps = 200
-""")
+SCENE = TINY_SCENES["fretting"].replace("steps = 20", "steps = 200")
 
 RUNNER = textwrap.dedent("""
     import sys, time, contactpipe as cp
