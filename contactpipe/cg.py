@@ -112,19 +112,24 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     Ax0 : ndarray, optional
         ``A x0`` if already known (saves one FFT pair).
     """
-    x = np.clip(np.asarray(x0, dtype=float), lo, hi)
+    x0 = np.asarray(x0, dtype=float)
+    x = np.clip(x0, lo, hi)
+    clipped = not np.array_equal(x, x0)
     if restore == "scale":
         s = x.sum()
         if s <= 0:
             x = np.where(lo < hi, 1.0, 0.0)
             s = x.sum()
-        x = x * (target / s)
-        changed = True
+            clipped = True
+        factor = target / s
+        x = x * factor
+        # a pure rescaling is linear: A x = factor * A x0
+        Ax = apply(x) if (Ax0 is None or clipped) else Ax0 * factor
     else:
         before = x.copy()
         x = _restore_by_shift(x, lo, hi, target, (x > lo) & (x < hi))
-        changed = not np.array_equal(before, x)
-    Ax = apply(x) if (Ax0 is None or changed or not np.array_equal(x, x0)) else Ax0
+        changed = clipped or not np.array_equal(before, x)
+        Ax = apply(x) if (Ax0 is None or changed) else Ax0
     if scale is None:
         scale = max(abs(target), 1e-300)
     movable = lo < hi
