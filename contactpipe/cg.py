@@ -47,43 +47,63 @@ class BoxResult:
     converged: bool
 
 
-def _restore_by_shift(x, lo, hi, target, free):
-    """Shift the free cells by one constant (clipped to the bounds) so that Σx = target.
+def _shift_root(xs, ls, hs, need):
+    """c with Σ clip(xs + c, ls, hs) = need (clipped to the attainable range).
 
-    Newton on the piecewise-linear monotone function f(c) = Σ clip(x + c) − target; a few
-    steps give the exact root. Falls back to all cells with room when the free ones are
-    saturated.
+    The function is monotone and piecewise linear in c: Newton steps (slope = the number
+    of cells strictly inside their bounds) inside a bracket, bisection when a step leaves
+    it or no cell is inside. Finite termination up to rounding.
     """
-    total = x.sum()
-    if total == target:
+    lo_sum, hi_sum = ls.sum(), hs.sum()
+    if need <= lo_sum:
+        return -np.inf
+    if need >= hi_sum:
+        return np.inf
+    c_lo = float(np.min(ls - xs))                     # every cell at its lower bound
+    finite_hi = np.isfinite(hs)
+    if finite_hi.all():
+        c_hi = float(np.max(hs - xs))                 # every cell at its upper bound
+    else:                                             # one-sided: grow until enough
+        c_hi = max(1.0, float(np.abs(xs).max()))
+        while np.clip(xs + c_hi, ls, hs).sum() < need:
+            c_hi *= 2.0
+    c = min(max(0.0, c_lo), c_hi)
+    tol = 1e-14 * (abs(need) + np.abs(xs).sum() + 1e-300)
+    for _ in range(200):
+        y = np.clip(xs + c, ls, hs)
+        f = y.sum() - need
+        if abs(f) <= tol:
+            break
+        if f > 0:
+            c_hi = c
+        else:
+            c_lo = c
+        inside = np.count_nonzero((xs + c > ls) & (xs + c < hs))
+        c_new = c - f / inside if inside else np.nan
+        if not (c_lo < c_new < c_hi):
+            c_new = 0.5 * (c_lo + c_hi)
+        if c_new == c:
+            break
+        c = c_new
+    return c
+
+
+def _restore_by_shift(x, lo, hi, target, free):
+    """Shift the free cells by one constant (clipped to their bounds) so that Σx = target;
+    when the free cells cannot carry it, every cell with room is shifted."""
+    if x.sum() == target:
         return x
     for cells in (free, lo < hi):
         if not cells.any():
             continue
         xs, ls, hs = x[cells], lo[cells], hi[cells]
-        rest = total - xs.sum()
-        c = 0.0
-        for _ in range(60):
-            y = np.clip(xs + c, ls, hs)
-            f = y.sum() + rest - target
-            if abs(f) <= 1e-14 * (abs(target) + np.abs(y).sum()):
-                break
-            inside = np.count_nonzero((xs + c > ls) & (xs + c < hs))
-            if inside == 0:
-                # step onto the nearest breakpoint in the right direction
-                gaps = (hs - xs - c) if f < 0 else (ls - xs - c)
-                gaps = gaps[(gaps > 0) if f < 0 else (gaps < 0)]
-                if gaps.size == 0:
-                    break
-                c += gaps.min() if f < 0 else gaps.max()
-                continue
-            c -= f / inside
-        y = np.clip(xs + c, ls, hs)
-        x = x.copy()
-        x[cells] = y
-        if abs(x.sum() - target) <= 1e-12 * (abs(target) + np.abs(x).sum()):
-            return x
-    return x
+        need = target - (x.sum() - xs.sum())
+        c = _shift_root(xs, ls, hs, need)
+        out = x.copy()
+        out[cells] = np.clip(xs + c, ls, hs)
+        if abs(out.sum() - target) <= 1e-12 * (abs(target) + np.abs(out).sum()):
+            return out
+    return out if "out" in locals() else x
 
 
 def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
@@ -188,7 +208,11 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     free = (x > lo) & (x < hi)
     if free.any():
         lam = g[free].mean()
-    return BoxResult(x=x, multiplier=float(lam), Ax=Ax, iterations=it, residual=float(err),
+    # the force balance is part of convergence: a state with every cell at a bound may
+    # satisfy the sign conditions and still carry the wrong force
+    force_err = abs(float(x.sum()) - target) / scale
+    err = max(float(err), force_err)
+    return BoxResult(x=x, multiplier=float(lam), Ax=Ax, iterations=it, residual=err,
                      converged=bool(err < tol))
 
 

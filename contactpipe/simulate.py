@@ -249,6 +249,11 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
                         f"{res.iterations} iterations, residual {res.residual:.3g} > tolerance "
                         f"{sv.tolerance:g} (W = {W[k]:.6g} N, T = ({T[0]:.6g}, {T[1]:.6g}) N)")
                 contact = res.p > 0
+                if sub_plan.tangential == "none" and tang and pl.coupling != "none":
+                    # frictionless preload on a coupled pair: the pressure still moves the
+                    # surfaces in-plane (K13, K23); record it, or the next step would take
+                    # it for slip
+                    res.u[:2] = U[:2] + op.coupling_to_tangential(res.p)
                 if tang:
                     du = res.u[:2] - u[:2]
                     ds = np.where(contact, res.domega[:, None, None] - du, 0.0)
