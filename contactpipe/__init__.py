@@ -26,20 +26,12 @@ from .scene import Scene
 from .plan import Plan, plan
 from .simulate import simulate
 from .archive import open_archive, save
+# the pipeline stages: bound after their modules so the names are the functions
+from .compare import compare
+from .sweep import open_sweep, sweep
 
 __all__ = [
     "__version__", "Scene", "simulate", "save", "open_archive", "plan", "Plan",
     "SceneError", "ConvergenceError", "GrossSlidingError", "GridError", "ArchiveError",
-    "ContactpipeError",
+    "ContactpipeError", "sweep", "open_sweep", "compare",
 ]
-
-
-def __getattr__(name):
-    # pipeline stages are imported on first use (they pull in dask.distributed/matplotlib)
-    if name in ("sweep", "open_sweep"):
-        from . import sweep as _sweep
-        return getattr(_sweep, name)
-    if name in ("compare",):
-        from . import compare as _compare
-        return _compare.compare
-    raise AttributeError(f"module 'contactpipe' has no attribute {name!r}")

@@ -80,7 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
             mod = importlib.import_module(module)
         except ImportError:
             continue
-        p = sub.add_parser(name, help=helptext, description=(mod.__doc__ or helptext).strip())
+        p = sub.add_parser(name, help=helptext, description=(mod.__doc__ or helptext).strip(),
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
         mod.add_arguments(p)
         p.set_defaults(func=mod.main)
     return parser

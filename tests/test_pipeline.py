@@ -1,0 +1,201 @@
+"""Batch pipeline: sweep -> compare -> plot; idempotent (mtimes), cron lock (exit 3),
+failures reported (exit 1), bad files (exit 2)."""
+import fcntl
+import importlib
+import json
+import os
+import pathlib
+import textwrap
+
+import pytest
+
+from contactpipe import cli
+from contactpipe.pipeline import PipelineLockedError, read_pipeline_file, run_pipeline
+
+CREEP = """
+name = "tiny-creep"
+[geometry]
+shape = "sphere"
+radius = 0.018
+[indenter]
+material = "rigid"
+[halfspace]
+material = "viscoelastic"
+young = 105e9
+poisson = 0.3
+creep = "maxwell"
+relaxation_time = 1.0
+[friction]
+mu = 0.0
+[load]
+time = [0.0, 1.0]
+normal_force = 1000.0
+[grid]
+points = [24, 24]
+size = [2.4e-3, 2.4e-3]
+[time]
+steps = 10
+"""
+
+
+def make_study(root: pathlib.Path, forces=(500.0, 1000.0), figures=None, reference=None):
+    """scenes/creep.toml, sweep.toml and pipeline.toml under ``root``."""
+    (root / "scenes").mkdir(parents=True, exist_ok=True)
+    (root / "scenes" / "creep.toml").write_text(CREEP)
+    (root / "sweep.toml").write_text(textwrap.dedent(f"""
+        base = "scenes/creep.toml"
+        [axes]
+        load.normal_force = {list(forces)}
+    """))
+    extra = ""
+    if reference is not None:
+        extra += f'[compare]\nreference = "{reference}"\n'
+    if figures is not None:
+        extra += f"[plot]\nfigures = {json.dumps(list(figures))}\n"
+    path = root / "pipeline.toml"
+    path.write_text(textwrap.dedent("""
+        name = "demo"
+        [sweep]
+        file = "sweep.toml"
+        out = "runs/demo"
+        [dask]
+        scheduler = "synchronous"
+    """) + extra)
+    return path
+
+
+def stamps(folder: pathlib.Path):
+    """{relative path: (inode, mtime_ns)} of every product and archive."""
+    skip = {"summary.json", "manifest.json", ".pipeline.lock", ".sweep.lock"}
+    return {str(p.relative_to(folder)): (p.stat().st_ino, p.stat().st_mtime_ns)
+            for p in folder.rglob("*") if p.is_file() and p.name not in skip}
+
+
+def forbid(monkeypatch, module, *names):
+    for name in names:
+        def boom(*args, _name=name, **kwargs):
+            raise AssertionError(f"{module.__name__}.{_name} called on an up-to-date run")
+        monkeypatch.setattr(module, name, boom)
+
+
+def test_second_run_does_nothing_and_stale_products_are_redone(tmp_path, monkeypatch):
+    path = make_study(tmp_path, figures=["profiles", "radii", "sweep"])
+    out = tmp_path / "runs" / "demo"
+    first = run_pipeline(path, progress=False)
+    assert first.ok, first.failed
+    assert len(first.computed) == 2 and not first.skipped
+    digests = sorted(m.digest for m in first.sweep.members)
+    for d in digests:
+        assert (out / f"{d}.nc").is_file()
+        assert (out / "compare" / f"{d}.nc").is_file()       # Lee-Radok applies
+        assert (out / "figures" / f"{d}-profiles.png").is_file()
+        assert (out / "figures" / f"{d}-radii.png").is_file()
+    assert (out / "figures" / "sweep-contact_area.png").is_file()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["ok"] and summary["counts"]["computed"] == 2
+    assert summary["counts"]["products_written"] == 2 + 4 + 1
+    assert {m["compare"]["closed_form"] for m in summary["members"]} == {"lee_radok"}
+    before = stamps(out)
+    assert not [k for k in before if ".part" in k or "-tmp" in k]
+
+    # nothing changed: no solver, no compare, no figure runs; nothing is rewritten
+    compare = importlib.import_module("contactpipe.compare")
+    plot = importlib.import_module("contactpipe.plot")
+    simulate = importlib.import_module("contactpipe.simulate")
+    forbid(monkeypatch, compare, "compare")
+    forbid(monkeypatch, plot, "plot_profiles", "plot_radii", "plot_sweep")
+    forbid(monkeypatch, simulate, "simulate")
+    second = run_pipeline(path, progress=False)
+    assert second.ok, second.failed
+    assert not second.computed and len(second.skipped) == 2
+    assert second.written == [] and len(second.up_to_date) == 7
+    assert stamps(out) == before
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["counts"] == {"members": 2, "computed": 0, "skipped": 2, "failed": 0,
+                                 "products_written": 0, "products_up_to_date": 7}
+    monkeypatch.undo()
+
+    # one member's archive is newer than its products: only those are redone
+    calls = []
+
+    def fake_compare(archive, reference=None, *, out=None, figure=None):
+        calls.append(("compare", pathlib.Path(archive).name))
+        pathlib.Path(out).write_bytes(b"table")
+
+    def fake_plot(kind):
+        def draw(ds, p, **kw):
+            calls.append((kind, None))
+            pathlib.Path(p).write_bytes(b"png")
+            return pathlib.Path(p)
+        return draw
+
+    monkeypatch.setattr(compare, "compare", fake_compare)
+    for kind in ("profiles", "radii", "sweep"):
+        monkeypatch.setattr(plot, f"plot_{kind}", fake_plot(kind))
+    forbid(monkeypatch, simulate, "simulate")
+    touched = out / f"{digests[0]}.nc"
+    later = max(v[1] for v in before.values()) + 1_000_000_000   # after every product
+    os.utime(touched, ns=(later, later))
+    third = run_pipeline(path, progress=False)
+    assert third.ok, third.failed
+    assert not third.computed
+    assert sorted(calls) == sorted([("compare", touched.name), ("profiles", None),
+                                    ("radii", None), ("sweep", None)])
+    after = stamps(out)
+    changed = sorted(k for k in after if after[k] != before[k])
+    assert changed == sorted([f"{digests[0]}.nc", f"compare/{digests[0]}.nc",
+                              f"figures/{digests[0]}-profiles.png",
+                              f"figures/{digests[0]}-radii.png",
+                              "figures/sweep-contact_area.png"])
+
+
+def test_lock_held_exits_3_with_one_line(tmp_path, capsys):
+    path = make_study(tmp_path, figures=[], reference="none")
+    out = tmp_path / "runs" / "demo"
+    out.mkdir(parents=True)
+    fd = os.open(out / ".pipeline.lock", os.O_RDWR | os.O_CREAT)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        os.write(fd, b"pid 12345 since yesterday\n")
+        code = cli.main(["pipeline", str(path), "--no-progress"])
+        err = capsys.readouterr().err
+        with pytest.raises(PipelineLockedError):
+            run_pipeline(path, progress=False)
+    finally:
+        os.close(fd)
+    assert code == 3
+    assert err.count("\n") == 1 and "another pipeline run holds the lock" in err
+    assert "pid 12345" in err
+    assert not (out / "manifest.json").exists()              # nothing was done
+    # the lock dies with its holder: the next run goes ahead
+    assert cli.main(["pipeline", str(path), "--no-progress"]) == 0
+
+
+def test_failed_member_others_land_exit_1(tmp_path, capsys):
+    path = make_study(tmp_path, forces=(1000.0, 1.0e5), figures=["radii"], reference="none")
+    out = tmp_path / "runs" / "demo"
+    code = cli.main(["pipeline", str(path), "--no-progress"])
+    captured = capsys.readouterr()
+    assert code == 1
+    assert "load.normal_force=100000" in captured.err and "GridError" in captured.err
+    summary = json.loads((out / "summary.json").read_text())
+    assert not summary["ok"]
+    assert [f["member"] for f in summary["failed"]] == ["load.normal_force=100000"]
+    assert summary["failed"][0]["stage"] == "simulate"
+    good = [m for m in summary["members"] if m["status"] == "done"]
+    assert len(good) == 1 and (out / good[0]["file"]).is_file()
+    assert (out / "figures" / f"{good[0]['digest']}-radii.png").is_file()
+
+
+def test_bad_pipeline_file_exit_2(tmp_path, capsys):
+    path = tmp_path / "pipeline.toml"
+    path.write_text('name = "x"\ncolour = "red"\n[sweep]\nfile = "nope.toml"\n'
+                    '[plot]\nfigures = ["profiles", "pie"]\n')
+    assert cli.main(["pipeline", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    for part in ("unknown key 'colour'", "no such sweep file", "unknown figure 'pie'",
+                 "out is missing"):
+        assert part in err
+    with pytest.raises(Exception, match="no such sweep file"):
+        read_pipeline_file(path)
