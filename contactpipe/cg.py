@@ -47,6 +47,12 @@ class BoxResult:
     converged: bool
 
 
+def _dot(a, b) -> float:
+    """Inner product without BLAS: OpenBLAS threads a long ddot, which on a busy 2-core
+    machine made a 256² fretting loop 4x slower (15.7 s against 3.9 s)."""
+    return float(np.einsum("i,i->", a, b))
+
+
 def _shift_root(xs, ls, hs, need):
     """c with Σ clip(xs + c, ls, hs) = need (clipped to the attainable range).
 
@@ -175,18 +181,18 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         if not working.any():
             err = 0.0
             break
-        G = float(np.dot(gr[working], gr[working]))
+        G = _dot(gr[working], gr[working])
         reset = released.any() or working_old is None or not np.array_equal(working, working_old)
         beta = 0.0 if reset else G / G_old
         t = np.where(working, gr + beta * t, 0.0)
         G_old = max(G, 1e-300)
         working_old = working
         r = apply(t)
-        denom = float(np.dot(r[working], t[working]))
+        denom = _dot(r[working], t[working])
         if denom <= 0.0:
             err = 0.0
             break
-        tau = float(np.dot(gr[working], t[working])) / denom
+        tau = _dot(gr[working], t[working]) / denom
         x_new = x - tau * t
         clipped = (x_new < lo) | (x_new > hi)
         if clipped.any():

@@ -112,6 +112,7 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     cell = d1 * d2
     gap = np.asarray(scene.geometry.gap(x1, x2), dtype=float)
     steps = _n_steps(scene)
+    _warn_off_knots(scene, steps)
     t, W, T1, T2 = scene.load.instants(steps)
     t = np.atleast_1d(np.asarray(t, dtype=float))
     W, T1, T2 = (np.broadcast_to(np.asarray(a, dtype=float), t.shape) for a in (W, T1, T2))
@@ -244,10 +245,17 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
                         f"has no static solution under force control. Lower the tangential "
                         f"force or refine the grid.")
                 if not res.converged:
+                    hint = ""
+                    if res.failed == "coupling":
+                        hint = (f"; the normal-tangential passes did not settle in "
+                                f"{res.passes} passes (strong coupling: large friction with "
+                                f"Dundurs beta = {_beta(b1, b2):.2f}); raise "
+                                f"solver.max_coupling_passes or take smaller load steps")
                     raise ConvergenceError(
                         f"{res.failed} problem at step {k} (t = {t[k]:.6g} s) stopped after "
                         f"{res.iterations} iterations, residual {res.residual:.3g} > tolerance "
-                        f"{sv.tolerance:g} (W = {W[k]:.6g} N, T = ({T[0]:.6g}, {T[1]:.6g}) N)")
+                        f"{sv.tolerance:g} (W = {W[k]:.6g} N, T = ({T[0]:.6g}, {T[1]:.6g}) N)"
+                        f"{hint}")
                 contact = res.p > 0
                 if sub_plan.tangential == "none" and tang and pl.coupling != "none":
                     # frictionless preload on a coupled pair: the pressure still moves the
@@ -339,6 +347,24 @@ class _Checkpoint:
 
     def remove(self):
         self.file.unlink(missing_ok=True)
+
+
+def _warn_off_knots(scene, steps):
+    """A load knot between mesh instants is cut off (a turning point of a fretting loop
+    is never reached): say so, with the step counts that would hold every knot."""
+    t = np.asarray(scene.load.knots()[0], dtype=float)
+    if t.size < 3 or steps < 1:
+        return
+    pos = (t[1:-1] - t[0]) / (t[-1] - t[0]) * steps
+    off = np.abs(pos - np.round(pos)) > 1e-6
+    if off.any():
+        import warnings
+        from .accuracy import knot_multiple
+        m = knot_multiple(scene)
+        hint = f"; use a multiple of {m} steps" if m else ""
+        warnings.warn(f"time.steps = {steps}: the load knots at t = "
+                      f"{', '.join(f'{x:g}' for x in t[1:-1][off])} s fall between instants of "
+                      f"the time mesh, so the program is cut there{hint}", stacklevel=3)
 
 
 def _frictionless(pl):

@@ -97,7 +97,7 @@ def test_identical_or_incompressible_pairs_skip_coupling():
     """β = 0: one normal and one tangential solve per step; coupling recorded as none."""
     for pair in ({}, {"indenter": {"material": "elastic", "young": 210e9, "poisson": 0.5},
                       "halfspace": {"material": "elastic", "young": 70e9, "poisson": 0.5}}):
-        ds = cp.simulate(fretting_scene(n=32, steps=8, **pair))
+        ds = cp.simulate(fretting_scene(n=32, steps=10, **pair))
         assert "coupling=none" in ds.attrs["models"]
         assert np.all(ds.coupling_passes.values == 1)
         assert_contact_laws(ds)
