@@ -7,13 +7,11 @@ gives the instantaneous composite modulus of the steel pair: at t = 0 the contac
 elastic one of figure 2 (p_H = 1.996 GPa, a_H = 0.489 mm). Two windows: (a) tau = t',
 (b) tau = 2 t'. The half-space is compressible (nu = 0.3) and the indenter rigid, so
 the normal and tangential problems couple (Dundurs beta = 0.29) and the middle loop runs.
-The normal load is applied with friction acting (``load.preload = "frictional"``, the
-package default): on this coupled pair the indentation itself leaves Spence's
-antisymmetric shear in the contact at t = 0 (zero resultant), which the tangential
-program then overwrites. The paper's initial frictionless normal solve
-(``preload = "frictionless"``) is not used here: on a coupled pair the package then
-counts the indentation's radial displacement as slip in the first step (a defect, see
-studies/README.md, 'Findings').
+As in the paper, the normal load is applied first by a frictionless normal solve (its
+outer loop, step 1: ``load.preload = "frictionless"``), so the contact holds no shear at
+t = 0. (With the package's default, ``"frictional"``, friction acts during the
+indentation and this coupled pair is left with Spence's antisymmetric shear at t = 0;
+``--frictional-preload`` draws that variant.)
 
 While the material creeps the contact grows (Lee-Radok: a^3 grows as phi(t)) and the
 pressure flattens; the shear follows the fretting program on the growing contact. The
@@ -44,12 +42,14 @@ from contactpipe.testing import contact_law_violations
 
 INSTANTS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 WINDOWS = (1.0, 2.0)           # tau / t'
+PRELOAD = ["frictionless"]     # the paper's initial normal solve (--frictional-preload: not)
 
 
 def run_window(out, ratio, n, steps):
     tau = ratio * c.RELAXATION_TIME
     scene = c.maxwell_fretting_scene(n=n, steps=steps, window=tau,
-                                     name=f"fig3-maxwell-tau{ratio:g}")
+                                     name=f"fig3-maxwell-tau{ratio:g}",
+                                     preload=PRELOAD[0])
     path = c.fresh(out / f"fig3_maxwell_tau{ratio:g}.nc")
     ds, wall = c.run(scene, path)
     ds = ds.load()
@@ -104,6 +104,10 @@ def describe(scene, ds, wall, ratio):
 
 
 def main(argv=None):
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if "--frictional-preload" in argv:
+        argv.remove("--frictional-preload")
+        PRELOAD[0] = "frictional"
     args = c.parser(__doc__.splitlines()[0], __doc__).parse_args(argv)
     out = c.out_dir(args)
     n, steps = (24, 10) if args.quick else (128, 200)
