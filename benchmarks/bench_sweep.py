@@ -23,32 +23,9 @@ import os
 import sys
 import tempfile
 import time
+from contactpipe.testing import TINY_SCENES
 
-FRETTING = """
-name = "bench-fretting"
-[geometry]
-shape = "sphere"
-radius = 0.018
-[indenter]
-material = "rigid"
-[halfspace]
-material = "viscoelastic"
-young = 105e9
-poisson = 0.3
-creep = "maxwell"
-relaxation_time = 1.0
-[friction]
-mu = 0.1
-[load]
-time = [0.0, 0.2, 0.6, 1.0]
-normal_force = 1000.0
-tangential_force = [0.0, 90.0, -90.0, 90.0]
-[grid]
-points = [24, 24]
-size = [2.0e-3, 2.0e-3]
-[time]
-steps = 200
-"""
+FRETTING = TINY_SCENES["fretting"]
 
 
 def _warm():

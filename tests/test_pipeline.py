@@ -11,31 +11,9 @@ import pytest
 
 from contactpipe import cli
 from contactpipe.pipeline import PipelineLockedError, read_pipeline_file, run_pipeline
+from contactpipe.testing import TINY_SCENES
 
-CREEP = """
-name = "tiny-creep"
-[geometry]
-shape = "sphere"
-radius = 0.018
-[indenter]
-material = "rigid"
-[halfspace]
-material = "viscoelastic"
-young = 105e9
-poisson = 0.3
-creep = "maxwell"
-relaxation_time = 1.0
-[friction]
-mu = 0.0
-[load]
-time = [0.0, 1.0]
-normal_force = 1000.0
-[grid]
-points = [24, 24]
-size = [2.4e-3, 2.4e-3]
-[time]
-steps = 10
-"""
+CREEP = TINY_SCENES["creep"]
 
 
 def make_study(root: pathlib.Path, forces=(500.0, 1000.0), figures=None, reference=None):

@@ -17,76 +17,14 @@ from contactpipe.exceptions import SceneError
 from contactpipe.scene import (BodySpec, Fretting, Friction, Geometry, Grid, Load, Output,
                                Scene, Solver, TimeMesh)
 
+from contactpipe.testing import TINY_SCENES
+
 REPO = Path(__file__).resolve().parents[1]
 
-# The shared examples (../shared/examples), copied so the tests stand alone.
-TINY_CREEP = """\
-# A small frictionless scene: rigid sphere on a Maxwell half-space, constant load.
-name = "tiny-creep"
+# The shared examples (../shared/examples), as contactpipe.testing carries them.
+TINY_CREEP = TINY_SCENES["creep"]
 
-[geometry]
-shape = "sphere"
-radius = 0.018
-
-[indenter]
-material = "rigid"
-
-[halfspace]
-material = "viscoelastic"
-young = 105e9
-poisson = 0.3
-creep = "maxwell"
-relaxation_time = 1.0
-
-[friction]
-mu = 0.0
-
-[load]
-time = [0.0, 1.0]
-normal_force = 1000.0
-
-[grid]
-points = [24, 24]
-size = [2.4e-3, 2.4e-3]
-
-[time]
-steps = 10
-"""
-
-TINY_FRETTING = """\
-# A small frictional scene with every sub-model: rigid sphere on a compressible Maxwell
-# half-space (coupling on), a fretting loop, memory for p and q.
-name = "tiny-fretting"
-
-[geometry]
-shape = "sphere"
-radius = 0.018
-
-[indenter]
-material = "rigid"
-
-[halfspace]
-material = "viscoelastic"
-young = 105e9
-poisson = 0.3
-creep = "maxwell"
-relaxation_time = 1.0
-
-[friction]
-mu = 0.1
-
-[load]
-time = [0.0, 0.2, 0.6, 1.0]
-normal_force = 1000.0
-tangential_force = [0.0, 90.0, -90.0, 90.0]
-
-[grid]
-points = [24, 24]
-size = [2.0e-3, 2.0e-3]
-
-[time]
-steps = 20
-"""
+TINY_FRETTING = TINY_SCENES["fretting"]
 
 EXAMPLES = {"tiny-creep": TINY_CREEP, "tiny-fretting": TINY_FRETTING}
 

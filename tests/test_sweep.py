@@ -20,61 +20,15 @@ from contactpipe.exceptions import ArchiveError, SceneError
 from contactpipe.scene import Scene
 from contactpipe.sweep import (SweepLockedError, load_sweep_file, open_sweep,
                                register_parameter, sweep, with_window)
+from contactpipe.testing import TINY_SCENES
 
 # the module (``contactpipe.sweep`` the attribute is the function, CONTRACT §1)
 sweep_mod = importlib.import_module("contactpipe.sweep")
 
-# the 24 x 24 scenes of shared/examples, inline (tests do not read ../shared)
-FRETTING = """
-name = "tiny-fretting"
-[geometry]
-shape = "sphere"
-radius = 0.018
-[indenter]
-material = "rigid"
-[halfspace]
-material = "viscoelastic"
-young = 105e9
-poisson = 0.3
-creep = "maxwell"
-relaxation_time = 1.0
-[friction]
-mu = 0.1
-[load]
-time = [0.0, 0.2, 0.6, 1.0]
-normal_force = 1000.0
-tangential_force = [0.0, 90.0, -90.0, 90.0]
-[grid]
-points = [24, 24]
-size = [2.0e-3, 2.0e-3]
-[time]
-steps = 20
-"""
+# the 24 x 24 scenes of shared/examples, as contactpipe.testing carries them
+FRETTING = TINY_SCENES["fretting"]
 
-CREEP = """
-name = "tiny-creep"
-[geometry]
-shape = "sphere"
-radius = 0.018
-[indenter]
-material = "rigid"
-[halfspace]
-material = "viscoelastic"
-young = 105e9
-poisson = 0.3
-creep = "maxwell"
-relaxation_time = 1.0
-[friction]
-mu = 0.0
-[load]
-time = [0.0, 1.0]
-normal_force = 1000.0
-[grid]
-points = [24, 24]
-size = [2.4e-3, 2.4e-3]
-[time]
-steps = 10
-"""
+CREEP = TINY_SCENES["creep"]
 
 # 1e5 N puts the contact of tiny-creep off its 2.4 mm grid: GridError at the first step
 TOO_BIG = 1.0e5
