@@ -110,13 +110,21 @@ class ContactOperator:
         return self.conv.convolve_matrix(rows, [q1, q2, p])
 
 
-def history_displacement(spectra1, spectra2, h1, h2, conv: Convolver, outputs=(1, 2, 3)):
+def history_kernels(spectra1, spectra2):
+    """Each body's kernel spectra with the signs of eq. (8) (body 1: coupling negative), for
+    :func:`history_displacement`; built once per run. None for a body without spectra."""
+    return (None if spectra1 is None else pair_kernels(spectra1, None),
+            None if spectra2 is None else pair_kernels(None, spectra2))
+
+
+def history_displacement(kernels, h1, h2, conv: Convolver, outputs=(1, 2, 3)):
     """Known displacement from the bodies' Boltzmann history tractions (weights already in).
 
     Parameters
     ----------
-    spectra1, spectra2 : BodySpectra or None
-        Kernel spectra of body 1 and body 2 (None: rigid or no history).
+    kernels : tuple
+        (body 1, body 2) signed kernel spectra from :func:`history_kernels`; an entry may be
+        None (rigid, or no history).
     h1, h2 : sequence of 3 arrays or None
         History tractions [Pa] for (q1, q2, p) of each body; an entry may be None (zero).
     outputs : tuple of int
@@ -128,10 +136,9 @@ def history_displacement(spectra1, spectra2, h1, h2, conv: Convolver, outputs=(1
         Relative displacement [m] with the signs of eq. (8).
     """
     out = np.zeros((len(outputs), conv.n1, conv.n2))
-    for spectra, h, first in ((spectra1, h1, True), (spectra2, h2, False)):
-        if spectra is None or h is None:
+    for k, h in zip(kernels, (h1, h2)):
+        if k is None or h is None:
             continue
-        k = pair_kernels(spectra, None) if first else pair_kernels(None, spectra)
         rows = [[k[f"{i}{j}"] for j in (1, 2, 3)] for i in outputs]
         xs = [None if (hj is None or not np.any(hj)) else hj for hj in h]
         out += conv.convolve_matrix(rows, xs)

@@ -75,7 +75,7 @@ import time as _time
 import tomllib
 
 from .exceptions import ArchiveError, ContactpipeError, SceneError
-from .sweep import (SweepLockedError, _flock, _now, _one_line, _read_sweep_table,
+from .sweep import (read_toml, SweepLockedError, _flock, _now, _one_line, _read_sweep_table,
                     _write_json, read_dask_table, read_sweep_file, sweep)
 
 __all__ = ["run_pipeline", "read_pipeline_file", "PipelineSpec", "PipelineResult",
@@ -131,12 +131,7 @@ def read_pipeline_file(path) -> PipelineSpec:
         The file does not exist.
     """
     path = pathlib.Path(path)
-    with open(path, "rb") as f:
-        raw = f.read()
-    try:
-        d = tomllib.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
-        raise SceneError(f"{path} is not a valid TOML pipeline file: {err}") from None
+    d = read_toml(path, "pipeline")
     here = path.resolve().parent
     problems = []
     for k in d:

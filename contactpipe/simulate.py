@@ -27,7 +27,8 @@ from .coupling import solve_instant
 from .exceptions import ConvergenceError, GridError, GrossSlidingError
 from .accuracy import resolve_accuracy
 from .memory import make_memory
-from .operator import ContactOperator, body_spectra, history_displacement
+from .operator import (ContactOperator, body_spectra, history_displacement,
+                       history_kernels)
 from .plan import plan as make_plan
 
 __all__ = ["simulate", "grid_coordinates"]
@@ -146,6 +147,8 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         return w
 
     op_first = ContactOperator(spec1, spec2, *weights(True), conv)
+    hist_kernels = history_kernels(spec1 if mems[0] is not None else None,
+                                   spec2 if mems[1] is not None else None)
     op_next = ContactOperator(spec1, spec2, *weights(False), conv) if t.size > 1 else op_first
 
     tang = pl.tangential != "none"
@@ -208,9 +211,7 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
             if any(m is not None for m in mems) and not first:
                 h = [None if m is None else m.known() for m in mems]
                 outputs = (1, 2, 3) if tang else (3,)
-                Uh = history_displacement(spec1 if mems[0] is not None else None,
-                                          spec2 if mems[1] is not None else None,
-                                          h[0], h[1], conv, outputs=outputs)
+                Uh = history_displacement(hist_kernels, h[0], h[1], conv, outputs=outputs)
                 U[[o - 1 for o in outputs]] = Uh
             T = np.array([T1[k], T2[k]])
             # the sub-steps of a frictional preload (instantaneous response at t0)

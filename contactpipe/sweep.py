@@ -102,6 +102,17 @@ from typing import Callable
 
 from .exceptions import ArchiveError, ContactpipeError, SceneError
 
+
+def read_toml(path, what) -> dict:
+    """A TOML file as a dict; SceneError naming the file if it is not valid UTF-8 TOML."""
+    path = pathlib.Path(path)
+    with open(path, "rb") as f:
+        raw = f.read()
+    try:
+        return tomllib.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
+        raise SceneError(f"{path} is not a valid TOML {what} file: {err}") from None
+
 __all__ = ["sweep", "open_sweep", "SweepResult", "Member", "SweepLockedError",
            "register_parameter", "derived_parameters", "relaxation_time", "with_window",
            "load_sweep_file", "read_sweep_file", "SweepFile", "read_manifest",
@@ -1124,12 +1135,7 @@ def read_sweep_file(path) -> SweepFile:
         base scene), one per line; FileNotFoundError when it does not exist.
     """
     path = pathlib.Path(path)
-    with open(path, "rb") as f:
-        raw = f.read()
-    try:
-        d = tomllib.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
-        raise SceneError(f"{path} is not a valid TOML sweep file: {err}") from None
+    d = read_toml(path, "sweep")
     problems = []
     base, axes, mode = _read_sweep_table(d, "", path.resolve().parent, problems)
     dask = read_dask_table(d.get("dask"), "dask", problems)
