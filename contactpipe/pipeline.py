@@ -72,7 +72,6 @@ import os
 import pathlib
 import sys
 import time as _time
-import tomllib
 
 from .exceptions import ArchiveError, ContactpipeError, SceneError
 from .sweep import (read_toml, SweepLockedError, _flock, _now, _one_line, _read_sweep_table,

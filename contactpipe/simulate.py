@@ -22,7 +22,6 @@ import time as _time
 
 import numpy as np
 
-from .convolution import Convolver
 from .coupling import solve_instant
 from .exceptions import ConvergenceError, GridError, GrossSlidingError
 from .accuracy import resolve_accuracy

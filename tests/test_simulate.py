@@ -9,7 +9,7 @@ import xarray as xr
 import contactpipe as cp
 from contactpipe.cli import main as cli_main
 
-from conftest import A_HERTZ, W, fretting_scene, make_scene
+from conftest import W, fretting_scene
 
 FIELDS = {"p": "Pa", "u3": "m", "h": "m"}
 SERIES = {"W": "N", "omega3": "m", "contact_area": "m2", "iterations": "1"}
