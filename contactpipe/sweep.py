@@ -863,7 +863,10 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None):
         ``digest`` names each member's archive. Where the members' time coordinates
         differ (a ``tau_ratio`` sweep), the time dimension is ``t_norm`` = (t - t0)/tau
         (tau the member's load window) and ``time`` is a coordinate varying along the
-        axes; otherwise ``time`` stays the dimension. Attributes ``sweep_axes``,
+        axes; otherwise ``time`` stays the dimension. Likewise, where the members' grids
+        differ (an automatic grid size that depends on the swept window), ``x1`` and ``x2``
+        stay dimensions (cell positions) and each member's cell centres are the coordinates
+        ``x1_cell``, ``x2_cell`` varying along the axes. Attributes ``sweep_axes``,
         ``sweep_dims`` (JSON), ``sweep_mode``, ``base_scene`` (TOML).
 
     Raises
@@ -910,10 +913,23 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None):
         times = [ds["time"].values for ds in datasets]
         same_time = all(t.shape == times[0].shape and np.array_equal(t, times[0])
                         for t in times)
+        grids = [(ds["x1"].values, ds["x2"].values) for ds in datasets]
+        same_grid = all(np.array_equal(g[0], grids[0][0]) and np.array_equal(g[1], grids[0][1])
+                        for g in grids)
+        if not same_grid and len({(g[0].size, g[1].size) for g in grids}) > 1:
+            raise ArchiveError(
+                f"{out_dir}: the members have grids of different sizes "
+                f"({sorted({(g[0].size, g[1].size) for g in grids})}); they cannot share "
+                "the x1, x2 dimensions — open them one by one with open_archive")
         prepared = []
         for m, ds in zip(done, datasets):
             ds = ds.copy()
             ds.attrs = {}
+            if not same_grid:
+                # each member keeps its own cell centres (e.g. an automatic grid that grows
+                # with the window): x1, x2 stay dimensions (cell positions), x1_cell, x2_cell
+                # are coordinates varying along the axes
+                ds = ds.rename_vars({"x1": "x1_cell", "x2": "x2_cell"})
             if not same_time:
                 t = ds["time"].values
                 span = t[-1] - t[0] if t.size > 1 else 1.0
@@ -949,6 +965,7 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None):
         "sweep_axes": json.dumps(manifest["axes"]),
         "sweep_dims": json.dumps(dims),
         "sweep_time_dim": "time" if same_time else "t_norm",
+        "sweep_grid": "shared" if same_grid else "per member (coordinates x1_cell, x2_cell)",
         "base_scene": manifest.get("base_scene", ""),
         "sweep_members": len(members),
     })

@@ -409,3 +409,19 @@ def test_public_names_resolve():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                        timeout=60)
     assert r.returncode == 0, r.stderr[-1500:]
+
+
+def test_members_on_their_own_grids(tmp_path):
+    """A tau_ratio sweep with grid.size = "auto": each member's grid grows with its window,
+    so the members keep their cell centres as x1_cell, x2_cell along the axis (no NaN
+    padding from a union of coordinates)."""
+    base = Scene.from_toml_text(CREEP).replace({"grid.size": "auto", "time.steps": 4})
+    res = sweep(base, {"tau_ratio": [0.5, 2.0]}, tmp_path / "sw", scheduler="synchronous",
+                progress=False)
+    assert res.ok
+    sw = open_sweep(tmp_path / "sw")
+    assert dict(sw.sizes)["x1"] == 24 and sw.x1_cell.dims == ("tau_ratio", "x1")
+    side = sw.x1_cell.max("x1") - sw.x1_cell.min("x1")
+    assert float(side.sel(tau_ratio=2.0)) > float(side.sel(tau_ratio=0.5))
+    assert not bool(np.isnan(sw.p.values).any())
+    assert "per member" in sw.attrs["sweep_grid"]
