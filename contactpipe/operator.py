@@ -14,10 +14,8 @@ import numpy as np
 from .convolution import Convolver
 from .influence import body_kernels, pair_kernels
 
-__all__ = ["BodySpectra", "ContactOperator", "body_spectra"]
-
-COMPONENTS = ("11", "12", "13", "21", "22", "23", "31", "32", "33")
-
+__all__ = ["BodySpectra", "ContactOperator", "body_spectra", "convolver", "history_kernels",
+           "history_displacement"]
 
 class BodySpectra(dict):
     """Kernel spectra (scaled for the inverse FFT) of one body on one grid: key 'ij'."""
@@ -25,13 +23,14 @@ class BodySpectra(dict):
 
 @lru_cache(maxsize=16)
 def _body_spectra_cached(n1, n2, d1, d2, young, poisson, backend, threads):
-    conv = _convolver(n1, n2, backend, threads)
+    conv = convolver(n1, n2, backend, threads)
     kernels = body_kernels(n1, n2, d1, d2, young, poisson)
     return BodySpectra({k: conv.kernel_spectrum(v) for k, v in kernels.items()})
 
 
 @lru_cache(maxsize=8)
-def _convolver(n1, n2, backend, threads):
+def convolver(n1, n2, backend="auto", threads=1):
+    """The process's DC-FFT engine for an n1 x n2 grid (FFT plans made once, then reused)."""
     return Convolver(n1, n2, backend=backend, threads=threads)
 
 

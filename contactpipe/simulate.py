@@ -26,7 +26,7 @@ from .coupling import solve_instant
 from .exceptions import ConvergenceError, GridError, GrossSlidingError
 from .accuracy import resolve_accuracy
 from .memory import make_memory
-from .operator import (ContactOperator, body_spectra, history_displacement,
+from .operator import (ContactOperator, body_spectra, convolver, history_displacement,
                        history_kernels)
 from .plan import plan as make_plan
 
@@ -124,8 +124,7 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     b1, b2 = scene.indenter.body(), scene.halfspace.body()
     spec1 = body_spectra(b1, n1, n2, d1, d2, backend, nthreads)
     spec2 = body_spectra(b2, n1, n2, d1, d2, backend, nthreads)
-    from .operator import _convolver
-    conv = _convolver(n1, n2, backend, int(nthreads))
+    conv = convolver(n1, n2, backend, int(nthreads))
 
     # memory: one per viscoelastic body; tractions held as (q1, q2, p)
     mems = [None, None]
