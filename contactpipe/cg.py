@@ -263,7 +263,7 @@ def fista(apply, b, project, x0, lipschitz, tol, max_iter, scale, Ax0=None):
     Returns (x, Ax, iterations, residual, converged).
     """
     x = project(x0)
-    Ax = apply(x)
+    Ax = apply(x) if (Ax0 is None or not np.array_equal(x, x0)) else Ax0
     y, Ay, tk = x, Ax, 1.0
     f_old = np.inf
     err = np.inf

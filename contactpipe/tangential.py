@@ -63,17 +63,21 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
         Warm start for q1 [Pa].
     """
     scale = max(float(bound.sum()), 1e-300)
-    res = box_cg(op.tangential_scalar, b1, -bound, bound, T1 / cell_area, q0, tol=tol,
-                 max_iter=max(1, max_iter // 2), restore="shift", scale=scale, Ax0=Aq0)
-    x, Ax, its, err, ok, lam = res.x, res.Ax, res.iterations, res.residual, res.converged, \
-        res.multiplier
-    if not ok:   # (nearly) full slip: finish with the projected gradient, which always converges
-        x, Ax, more, err, ok = fista(op.tangential_scalar, b1,
-                                     lambda y: project_box_sum(y, -bound, bound, T1 / cell_area),
-                                     x, _lipschitz(op, 1), tol, max_iter - its, scale)
-        its += more
-        stick = (bound > 0) & (np.abs(x) < bound * (1.0 - 1e-12))
-        lam = float(_multiplier((Ax + b1)[None], stick)[0])
+    target = T1 / cell_area
+
+    def cg(x0, Ax0, tol_, budget):
+        r = box_cg(op.tangential_scalar, b1, -bound, bound, target, x0, tol=tol_,
+                   max_iter=budget, restore="shift", scale=scale, Ax0=Ax0)
+        return r.x, r.Ax, r.iterations, r.residual, r.converged
+
+    def pg(x0, Ax0, tol_, budget):
+        return fista(op.tangential_scalar, b1,
+                     lambda y: project_box_sum(y, -bound, bound, target), x0,
+                     _lipschitz(op, 1), tol_, budget, scale, Ax0=Ax0)
+
+    x, Ax, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
+    stick = (bound > 0) & (np.abs(x) < bound * (1.0 - 1e-12))
+    lam = float(_multiplier((Ax + b1)[None], stick)[0])
     q = np.zeros((2,) + b1.shape)
     q[0] = x
     Aq = np.zeros_like(q)
@@ -274,6 +278,28 @@ def _lipschitz(op, components):
     return float(np.max(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + c ** 2)))
 
 
+def _cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter):
+    """CG first; where it stalls, the projected gradient to a loose tolerance (it finds the
+    slip/stick pattern that pins the multiplier), then CG again from there; the projected
+    gradient, which always converges, finishes if CG stalls a second time.
+
+    ``cg`` and ``pg`` take (x0, Ax0, tol, budget) and return (x, Ax, iterations, residual,
+    converged). Returns the same tuple, iterations summed.
+    """
+    budget = max(1, max_iter // 4)
+    x, Ax, its, err, ok = cg(x0, Ax0, tol, budget)
+    if ok:
+        return x, Ax, its, err, ok
+    x, Ax, more, err, _ = pg(x, Ax, max(tol, 1e-6), budget)
+    its += more
+    x, Ax, more, err, ok = cg(x, Ax, tol, budget)
+    its += more
+    if ok:
+        return x, Ax, its, err, ok
+    x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
+    return x, Ax, its + more, err, ok
+
+
 def _multiplier(g, stick):
     return g[..., stick].mean(axis=-1) if stick.any() else np.zeros(g.shape[:-2])
 
@@ -296,19 +322,22 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
 
     Notes
     -----
-    The preconditioned projected CG (:func:`_vector_cg`) is tried first with half the
-    iteration budget; where it does not converge — typically when (almost) every cell
-    slips and the multiplier Δω is not pinned by stick cells — the accelerated projected
-    gradient (:func:`contactpipe.cg.fista`), which always converges, finishes from its iterate.
+    The preconditioned projected CG (:func:`_vector_cg`) runs first; where it stalls —
+    typically when (almost) every cell slips and the multiplier Δω is not pinned by stick
+    cells — see :func:`_cg_with_fallback`.
     """
-    res = _vector_cg(op, b, bound, T, cell_area, q0, tol, max(1, max_iter // 2), Aq0)
-    if res.converged:
-        return res
     target = np.asarray(T, dtype=float) / cell_area
-    q, Aq, its, err, ok = fista(op.tangential_vector, b,
-                                lambda y: project_disks_sum(y, bound, target), res.q,
-                                _lipschitz(op, 2), tol, max_iter - res.iterations,
-                                max(float(bound.sum()), 1e-300))
+    scale = max(float(bound.sum()), 1e-300)
+
+    def cg(x0, Ax0, tol_, budget):
+        r = _vector_cg(op, b, bound, T, cell_area, x0, tol_, budget, Ax0)
+        return r.q, r.Aq, r.iterations, r.residual, r.converged
+
+    def pg(x0, Ax0, tol_, budget):
+        return fista(op.tangential_vector, b, lambda y: project_disks_sum(y, bound, target),
+                     x0, _lipschitz(op, 2), tol_, budget, scale, Ax0=Ax0)
+
+    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
     stick = (bound > 0) & (np.hypot(q[0], q[1]) < bound * (1.0 - 1e-12))
     return TangentialResult(q=q, domega=_multiplier(Aq + b, stick), Aq=Aq,
-                            iterations=its + res.iterations, residual=err, converged=ok)
+                            iterations=its, residual=err, converged=ok)
