@@ -74,11 +74,11 @@ def _shift_root(xs, ls, hs, need):
         while np.clip(xs + c_hi, ls, hs).sum() < need:
             c_hi *= 2.0
     c = min(max(0.0, c_lo), c_hi)
-    tol = 1e-14 * (abs(need) + np.abs(xs).sum() + 1e-300)
     for _ in range(200):
         y = np.clip(xs + c, ls, hs)
         f = y.sum() - need
-        if abs(f) <= tol:
+        # relative to the clipped values: xs may be far outside the bounds (a projection)
+        if abs(f) <= 1e-14 * (abs(need) + np.abs(y).sum() + 1e-300):
             break
         if f > 0:
             c_hi = c
@@ -223,32 +223,13 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
 
 
 def project_box_sum(y, lo, hi, target):
-    """Euclidean projection of y onto {lo ≤ x ≤ hi, Σx = target}: x = clip(y − ν) with the
-    scalar ν found by Newton's method on the monotone piecewise-linear Σ clip(y − ν)."""
+    """Euclidean projection of y onto {lo ≤ x ≤ hi, Σx = target}: x = clip(y + c) with the
+    scalar c from the bracketed root-finder :func:`_shift_root`."""
     movable = lo < hi
-    fixed_sum = float(np.clip(y, lo, hi)[~movable].sum())
-    ys, ls, hs = y[movable], lo[movable], hi[movable]
-    nu = 0.0
-    for _ in range(200):
-        z = ys - nu
-        x = np.clip(z, ls, hs)
-        f = x.sum() + fixed_sum - target
-        if abs(f) <= 1e-14 * (abs(target) + np.abs(x).sum()):
-            break
-        inside = np.count_nonzero((z > ls) & (z < hs))
-        if inside == 0:          # jump to the nearest breakpoint
-            if f > 0:
-                cand = (ys - hs)[ys - hs > nu]
-                cand = np.concatenate([cand, (ys - ls)[ys - ls > nu]])
-                nu = cand.min() if cand.size else nu + abs(f)
-            else:
-                cand = (ys - ls)[ys - ls < nu]
-                cand = np.concatenate([cand, (ys - hs)[ys - hs < nu]])
-                nu = cand.max() if cand.size else nu - abs(f)
-            continue
-        nu += f / inside
     out = np.clip(y, lo, hi)
-    out[movable] = np.clip(ys - nu, ls, hs)
+    ys, ls, hs = y[movable], lo[movable], hi[movable]
+    c = _shift_root(ys, ls, hs, target - float(out[~movable].sum()))
+    out[movable] = np.clip(ys + c, ls, hs)
     return out
 
 

@@ -63,6 +63,7 @@ class ContactOperator:
         s2 = spectra2 if (spectra2 is not None and self.w2 != 0.0) else None
         self.rigid = s1 is None and s2 is None
         self.k = pair_kernels(s1, s2, self.w1, self.w2) if not self.rigid else None
+        self._derived = {}          # constants derived from the spectra, computed once
 
     # -- the pieces the inner problems need -------------------------------------------
     def normal(self, p):
@@ -96,11 +97,30 @@ class ContactOperator:
         return self.conv.convolve_matrix(rows, [q1, q2, p])
 
     def self_influence(self, component="11"):
-        """Displacement of a cell under its own unit traction, K_ij(0, 0) [m/Pa]."""
-        k = self.k[component]
-        m2 = self.conv.m2
-        total = k[:, 0].sum() + 2.0 * k[:, 1:m2 // 2].sum() + k[:, m2 // 2].sum()
-        return float(np.real(total))
+        """Displacement of a cell under its own unit traction, K_ij(0, 0) [m/Pa] (cached)."""
+        key = ("self", component)
+        if key not in self._derived:
+            k = self.k[component]
+            m2 = self.conv.m2
+            total = k[:, 0].sum() + 2.0 * k[:, 1:m2 // 2].sum() + k[:, m2 // 2].sum()
+            self._derived[key] = float(np.real(total))
+        return self._derived[key]
+
+    def tangential_norm(self, components=2):
+        """Largest eigenvalue of the tangential kernel block over the padded spectrum, an
+        upper bound of the operator's norm (the projected-gradient step; cached)."""
+        key = ("norm", components)
+        if key not in self._derived:
+            k = self.k
+            m = self.conv.m1 * self.conv.m2
+            a = np.real(k["11"]) * m
+            if components == 1:
+                value = float(np.max(a))
+            else:
+                c, d = np.real(k["12"]) * m, np.real(k["22"]) * m
+                value = float(np.max(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + c ** 2)))
+            self._derived[key] = value
+        return self._derived[key]
 
     def full(self, p, q1=None, q2=None):
         """(u1, u2, u3) [m] from all tractions (3 forward, 3 inverse transforms at most)."""

@@ -73,7 +73,7 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
     def pg(x0, Ax0, tol_, budget):
         return fista(op.tangential_scalar, b1,
                      lambda y: project_box_sum(y, -bound, bound, target), x0,
-                     _lipschitz(op, 1), tol_, budget, scale, Ax0=Ax0)
+                     op.tangential_norm(1), tol_, budget, scale, Ax0=Ax0)
 
     x, Ax, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
     stick = (bound > 0) & (np.abs(x) < bound * (1.0 - 1e-12))
@@ -266,18 +266,6 @@ def project_disks_sum(y, rho, target):
     return xout
 
 
-def _lipschitz(op, components):
-    """Largest eigenvalue of the tangential kernel block over the padded spectrum: an upper
-    bound of the operator's norm (the step of the projected gradient)."""
-    k = op.k
-    m = op.conv.m1 * op.conv.m2
-    a = np.real(k["11"]) * m
-    if components == 1:
-        return float(np.max(a))
-    c, d = np.real(k["12"]) * m, np.real(k["22"]) * m
-    return float(np.max(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + c ** 2)))
-
-
 def _cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter):
     """CG first; where it stalls, the projected gradient to a loose tolerance (it finds the
     slip/stick pattern that pins the multiplier), then CG again from there; the projected
@@ -335,7 +323,7 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
 
     def pg(x0, Ax0, tol_, budget):
         return fista(op.tangential_vector, b, lambda y: project_disks_sum(y, bound, target),
-                     x0, _lipschitz(op, 2), tol_, budget, scale, Ax0=Ax0)
+                     x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
 
     q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
     stick = (bound > 0) & (np.hypot(q[0], q[1]) < bound * (1.0 - 1e-12))
