@@ -6,7 +6,7 @@ Each member is the 24 x 24 tiny-fretting scene (rigid sphere on a Maxwell half-s
 one fretting loop) with ``time.steps`` = 200 (about 1-2 s each), swept over
 ``friction.mu``. For every worker count the script prints
 
-- ``sweep``: the wall time of :func:`contactpipe.sweep.sweep` on an already running
+- ``sweep``: the wall time of :func:`contactpipe.pipeline.sweep.sweep` on an already running
   cluster whose workers have imported contactpipe (the time the members take, the
   scheduling overhead included, the cluster start-up left out), and
 - ``end to end``: the same sweep letting :func:`sweep` start and close its own
@@ -29,7 +29,7 @@ FRETTING = TINY_SCENES["fretting"]
 
 
 def _warm():
-    import contactpipe.simulate  # noqa: F401 - imports numpy, pyfftw, netCDF4 on the worker
+    import contactpipe.simulation  # noqa: F401 - imports numpy, pyfftw, netCDF4 on the worker
     return os.getpid()
 
 
@@ -37,7 +37,7 @@ def run(steps: int, members: int, workers: list[int]) -> int:
     import distributed
 
     from contactpipe.scene import Scene
-    from contactpipe.sweep import sweep
+    from contactpipe.pipeline.sweep import sweep
 
     base = Scene.from_toml_text(FRETTING).replace({"time.steps": steps})
     axes = {"friction.mu": [round(0.10 + 0.01 * i, 4) for i in range(members)]}

@@ -13,22 +13,17 @@ coefficients by DC-FFT. Every simulation returns a labelled :class:`xarray.Datas
 
 All quantities are SI (m, s, N, Pa, J); see docs/conventions.md for signs.
 """
-from importlib.metadata import PackageNotFoundError, version as _version
-
-try:
-    __version__ = _version("contactpipe")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0.1.0"
+from ._version import __version__
 
 from .exceptions import (ArchiveError, ContactpipeError, ConvergenceError, GridError,
                          GrossSlidingError, SceneError)
 from .scene import Scene
-from .plan import Plan, plan
-from .simulate import simulate
+from .planning import Plan, plan
+from .simulation import simulate
 from .archive import open_archive, save
 # the pipeline stages: bound after their modules so the names are the functions
-from .compare import compare
-from .sweep import open_sweep, sweep
+from .pipeline.compare import compare
+from .pipeline.sweep import open_sweep, sweep
 
 __all__ = [
     "__version__", "Scene", "simulate", "save", "open_archive", "plan", "Plan",

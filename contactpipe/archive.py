@@ -25,22 +25,20 @@ or float32 (the precision), ``status`` int8, counts int32, coordinates always fl
 from __future__ import annotations
 
 import glob
-import importlib.metadata
 import json
 import math
 import numbers
-import os
 import pathlib
-import secrets
 import time as _time
-import tomllib
 import weakref
 
 import netCDF4
 import numpy as np
 import xarray as xr
 
-from .exceptions import ArchiveError
+from ._version import __version__
+from .exceptions import ArchiveError, one_line as _one_line
+from .files import loads_toml, publish as _publish, temp_name as _temp_path
 from .nomenclature import (
     CONVENTIONS, COORDINATES, FIELD, REQUIRED_ATTRS, VARIABLES, cf_attrs,
 )
@@ -55,24 +53,6 @@ DIMS = FIELD               # ("time", "x1", "x2")
 
 
 # --------------------------------------------------------------------------- helpers
-
-def _version() -> str:
-    """contactpipe.__version__ if the package defines it, else the installed metadata."""
-    try:
-        from contactpipe import __version__
-        return str(__version__)
-    except ImportError:
-        pass
-    try:
-        return importlib.metadata.version("contactpipe")
-    except importlib.metadata.PackageNotFoundError:
-        return "0.1.0"
-
-
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
-
 
 def _join(problems: list[str]) -> str:
     if len(problems) == 1:
@@ -119,7 +99,7 @@ def _is_storable(value) -> bool:
 
 def _global_attrs(attrs: dict | None) -> dict:
     """Defaults (Conventions, contactpipe_version) under the caller's attributes."""
-    out = {"Conventions": CONVENTIONS, "contactpipe_version": _version()}
+    out = {"Conventions": CONVENTIONS, "contactpipe_version": __version__}
     out.update(_storable(attrs))
     out.pop("complete", None)          # only a finished write sets it
     return out
@@ -137,8 +117,8 @@ def _attr_problems(attrs: dict, required=REQUIRED_ATTRS) -> list[str]:
                             "expected the scene as TOML text")
         else:
             try:
-                tomllib.loads(scene)
-            except tomllib.TOMLDecodeError as e:
+                loads_toml(scene)
+            except ValueError as e:
                 problems.append(f"global attribute 'scene' is not TOML text ({_one_line(e)})")
     if "models" in attrs and not isinstance(attrs["models"], str):
         problems.append(f"global attribute 'models' = {attrs['models']!r}, expected text "
@@ -199,42 +179,10 @@ def _storage_dtype(name: str, precision: np.dtype) -> np.dtype:
     return precision if kind == "float" else np.dtype(kind)
 
 
-def _temp_path(path: pathlib.Path) -> pathlib.Path:
-    return path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.part")
-
-
 def resumable_part(path) -> pathlib.Path:
     """The fixed part-file name of a resumable write of ``path``."""
     path = pathlib.Path(path)
     return path.with_name(f".{path.name}.resumable.part")
-
-
-def _fsync(path: pathlib.Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _fsync_dir(folder: pathlib.Path) -> None:
-    try:                                   # makes the rename durable; not possible everywhere
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def _publish(tmp: pathlib.Path, path: pathlib.Path) -> None:
-    """fsync the finished temporary file and rename it onto the target."""
-    _fsync(tmp)
-    os.replace(tmp, path)
-    _fsync_dir(path.parent)
 
 
 # --------------------------------------------------------------------------- writers
@@ -715,7 +663,7 @@ def save(ds: xr.Dataset, path, precision=None, compress=True) -> pathlib.Path:
     Parameters
     ----------
     ds : xarray.Dataset
-        An archive Dataset (:func:`to_dataset`, :func:`contactpipe.simulate`,
+        An archive Dataset (:func:`to_dataset`, :func:`contactpipe.simulation`,
         :func:`open_archive`). Boolean and None attributes are converted.
     path : str or path-like
         Target file; replaced only once the new archive is complete.

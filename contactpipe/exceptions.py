@@ -34,3 +34,19 @@ class GridError(ContactpipeError, RuntimeError):
 
 class ArchiveError(ContactpipeError, OSError):
     """An archive is missing, truncated, corrupt or does not follow the schema."""
+
+
+class OutputPathError(ContactpipeError, ValueError):
+    """An output path cannot be written: empty, a directory, a device, or an input file."""
+
+
+def one_line(err: BaseException, with_type: bool = True) -> str:
+    """An exception as one line of text for a message: ``Type: text`` (or just the text).
+
+    Whitespace runs, newlines included, become one space; an empty message gives the
+    type's name.
+    """
+    text = " ".join(str(err).split())
+    if not text:
+        return type(err).__name__
+    return f"{type(err).__name__}: {text}" if with_type else text

@@ -10,7 +10,7 @@ Every normalised creep function here has the form
 
     phi(t) = a + b t + sum_i d_i exp(-t / tau_i)          [1]
 
-which is what makes the O(N)-per-step recursion of :mod:`contactpipe.memory` possible.
+which is what makes the O(N)-per-step recursion of :mod:`contactpipe.solver.memory` possible.
 A tabulated creep function (:class:`TabulatedCreep`) is also offered; it needs the
 direct (O(k N) per step) Boltzmann sum.
 

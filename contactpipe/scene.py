@@ -42,7 +42,6 @@ import json
 import math
 import os
 import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
@@ -52,6 +51,7 @@ import tomli_w
 from . import geometry as _geometry
 from . import materials
 from .exceptions import SceneError
+from .files import loads_toml
 
 __all__ = ["Scene", "Geometry", "BodySpec", "Friction", "Load", "Fretting", "Grid",
            "TimeMesh", "Solver", "Output", "SceneError"]
@@ -1229,10 +1229,7 @@ class Scene:
 
     @classmethod
     def _from_toml(cls, text, base_dir, source):
-        try:
-            d = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise SceneError(f"{source} is not valid TOML: {exc}") from None
+        d = loads_toml(text, source)
         geo = d.get("geometry")
         if base_dir is not None and isinstance(geo, dict) and isinstance(geo.get("file"), str):
             file = os.path.expanduser(geo["file"])
@@ -1256,7 +1253,7 @@ class Scene:
         d = self.to_dict()
         text = tomli_w.dumps(d)
         compact = _compact_arrays(text)
-        return compact if tomllib.loads(compact) == tomllib.loads(text) else text
+        return compact if loads_toml(compact) == loads_toml(text) else text
 
     def digest(self) -> str:
         """A stable identifier of the simulation: 16 hex characters of the sha256 of

@@ -15,9 +15,10 @@ Laws checked at every recorded instant (docs/conventions.md for the signs):
 """
 from __future__ import annotations
 
-import tomllib
 
 import numpy as np
+
+from .files import loads_toml
 
 __all__ = ["contact_law_violations", "assert_contact_laws", "tiny_scene", "TINY_SCENES"]
 
@@ -88,7 +89,7 @@ def tiny_scene(kind="fretting", **changes):
 def contact_law_violations(ds, rtol=1e-9, rtol_coulomb=1e-9) -> list[str]:
     """List of violated laws (empty when the archive obeys them all)."""
     bad = []
-    mu = float(tomllib.loads(ds.attrs["scene"]).get("friction", {}).get("mu", 0.0))
+    mu = float(loads_toml(ds.attrs["scene"], "the archive's scene attribute").get("friction", {}).get("mu", 0.0))
     d1 = float(ds.x1[1] - ds.x1[0])
     d2 = float(ds.x2[1] - ds.x2[0])
     cell = d1 * d2

@@ -8,8 +8,8 @@ import xarray as xr
 
 import contactpipe as cp
 from contactpipe import analytic as an
-from contactpipe.cli import main as cli_main
-from contactpipe.compare import _iwan_dissipation, closed_form_for, compare
+from contactpipe.pipeline.cli import main as cli_main
+from contactpipe.pipeline.compare import _iwan_dissipation, closed_form_for, compare
 from contactpipe.exceptions import ArchiveError, SceneError
 
 from conftest import A_HERTZ, W, fretting_scene, make_scene

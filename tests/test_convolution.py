@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from contactpipe.convolution import HAVE_PYFFTW, Convolver
-from contactpipe.influence import body_kernels
+from contactpipe.solver.convolution import HAVE_PYFFTW, Convolver
+from contactpipe.solver.influence import body_kernels
 
 
 def direct_linear_convolution(kernel_wrap, x):

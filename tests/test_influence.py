@@ -1,4 +1,4 @@
-"""Tests of contactpipe.influence: rectangle-cell influence coefficients of a half-space.
+"""Tests of contactpipe.solver.influence: rectangle-cell influence coefficients of a half-space.
 
 References checked: the Boussinesq and Cerruti point-load solutions (Johnson, Contact
 Mechanics, 1985, §3.2-3.5) far from the cell and, near it, direct numerical quadrature of
@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import IntegrationWarning, dblquad
 
 from contactpipe.exceptions import SceneError
-from contactpipe.influence import (
+from contactpipe.solver.influence import (
     COUPLING_KEYS, KEYS, body_kernels, cell_influence, offset_grid, pair_kernels,
 )
 

@@ -11,7 +11,7 @@ import pytest
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.materials import TabulatedCreep, kelvin_voigt, maxwell, prony, zener
-from contactpipe.memory import DirectMemory, RecursiveMemory, make_memory
+from contactpipe.solver.memory import DirectMemory, RecursiveMemory, make_memory
 
 R, W, E, NU = 0.018, 1000.0, 105e9, 0.3
 

@@ -9,8 +9,8 @@ import textwrap
 
 import pytest
 
-from contactpipe import cli
-from contactpipe.pipeline import PipelineLockedError, read_pipeline_file, run_pipeline
+from contactpipe.pipeline import cli
+from contactpipe.pipeline.run import PipelineLockedError, read_pipeline_file, run_pipeline
 from contactpipe.testing import TINY_SCENES
 
 CREEP = TINY_SCENES["creep"]
@@ -77,9 +77,9 @@ def test_second_run_does_nothing_and_stale_products_are_redone(tmp_path, monkeyp
     assert not [k for k in before if ".part" in k or "-tmp" in k]
 
     # nothing changed: no solver, no compare, no figure runs; nothing is rewritten
-    compare = importlib.import_module("contactpipe.compare")
-    plot = importlib.import_module("contactpipe.plot")
-    simulate = importlib.import_module("contactpipe.simulate")
+    compare = importlib.import_module("contactpipe.pipeline.compare")
+    plot = importlib.import_module("contactpipe.pipeline.plot")
+    simulate = importlib.import_module("contactpipe.simulation")
     forbid(monkeypatch, compare, "compare")
     forbid(monkeypatch, plot, "plot_profiles", "plot_radii", "plot_sweep")
     forbid(monkeypatch, simulate, "simulate")

@@ -6,8 +6,8 @@ import xarray as xr
 from matplotlib.image import imread
 
 import contactpipe as cp
-from contactpipe import plot
-from contactpipe.cli import main as cli_main
+from contactpipe.pipeline import plot
+from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.exceptions import ArchiveError
 
 from conftest import fretting_scene

@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 import contactpipe as cp
-from contactpipe.cli import main as cli_main
+from contactpipe.pipeline.cli import main as cli_main
 
 from conftest import W, fretting_scene
 
@@ -114,7 +114,7 @@ def test_cli_run_writes_archive(tmp_path):
 def test_cli_bad_scene_one_line(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(creep_scene().to_toml().replace("poisson = 0.3", "poisson = 0.7"))
-    r = subprocess.run([sys.executable, "-m", "contactpipe.cli", "run", str(bad), "-o",
+    r = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run", str(bad), "-o",
                         str(tmp_path / "o.nc")], capture_output=True, text=True)
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
@@ -123,6 +123,6 @@ def test_cli_bad_scene_one_line(tmp_path):
 
 
 def test_cli_missing_file(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "contactpipe.cli", "run", str(tmp_path / "no.toml"),
+    r = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run", str(tmp_path / "no.toml"),
                         "-o", str(tmp_path / "o.nc")], capture_output=True, text=True)
     assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1

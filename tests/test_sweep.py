@@ -14,16 +14,16 @@ import time
 import numpy as np
 import pytest
 
-from contactpipe import cli
+from contactpipe.pipeline import cli
 from contactpipe.archive import open_archive
 from contactpipe.exceptions import ArchiveError, SceneError
 from contactpipe.scene import Scene
-from contactpipe.sweep import (SweepLockedError, load_sweep_file, open_sweep,
+from contactpipe.pipeline.sweep import (SweepLockedError, load_sweep_file, open_sweep,
                                register_parameter, sweep, with_window)
 from contactpipe.testing import TINY_SCENES
 
-# the module (``contactpipe.sweep`` the attribute is the function, CONTRACT §1)
-sweep_mod = importlib.import_module("contactpipe.sweep")
+# the module (``contactpipe.pipeline.sweep`` the attribute is the function, CONTRACT §1)
+sweep_mod = importlib.import_module("contactpipe.pipeline.sweep")
 
 # the 24 x 24 scenes of shared/examples, as contactpipe.testing carries them
 FRETTING = TINY_SCENES["fretting"]
@@ -143,7 +143,7 @@ def test_local_cluster_tau_ratio_by_mu(client, fretting, tmp_path):
 KILL_SCRIPT = """
 import sys
 from contactpipe.scene import Scene
-from contactpipe.sweep import sweep
+from contactpipe.pipeline.sweep import sweep
 
 if __name__ == "__main__":
     base = Scene.from_toml_text(sys.argv[2]).replace({"time.steps": 60})

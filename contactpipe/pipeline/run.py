@@ -1,9 +1,9 @@
 """Batch pipeline: sweep -> compare -> plot, idempotent and safe to run from cron.
 
 ``contactpipe pipeline PIPELINE.toml [--scheduler ADDRESS] [--workers N] [--no-progress]``
-runs the sweep of the file (on dask, resumable: :mod:`contactpipe.sweep`), compares every
-member with its closed form or a reference archive (:mod:`contactpipe.compare`), draws the
-standard figures of every member and an overlay of the sweep (:mod:`contactpipe.plot`),
+runs the sweep of the file (on dask, resumable: :mod:`contactpipe.pipeline.sweep`), compares every
+member with its closed form or a reference archive (:mod:`contactpipe.pipeline.compare`), draws the
+standard figures of every member and an overlay of the sweep (:mod:`contactpipe.pipeline.plot`),
 and writes a summary.
 
 Pipeline file::
@@ -29,13 +29,13 @@ compared when ``reference = "closed_form"`` (the summary says so); that is not a
 Outputs, in ``out``
 -------------------
 ``<digest>.nc``, ``manifest.json``
-    The member archives and the sweep manifest (:func:`contactpipe.sweep.sweep`).
+    The member archives and the sweep manifest (:func:`contactpipe.pipeline.sweep.sweep`).
 ``compare/<digest>.nc``
-    Per member error table (:func:`contactpipe.compare.compare`).
+    Per member error table (:func:`contactpipe.pipeline.compare.compare`).
 ``figures/<digest>-<kind>.png``
     Per member figures (``profiles``, ``hysteresis``, ``radii``).
 ``figures/sweep-<variable>.png``
-    The members overlaid (:func:`contactpipe.plot.plot_sweep`).
+    The members overlaid (:func:`contactpipe.pipeline.plot.plot_sweep`).
 ``summary.json``
     What this run did: members (values, digest, status, error), products (path, written
     or up to date), failures, wall times. Rewritten atomically on every run.
@@ -68,14 +68,15 @@ import contextlib
 import dataclasses
 import importlib
 import json
-import os
 import pathlib
 import sys
 import time as _time
 
-from .exceptions import ArchiveError, ContactpipeError, SceneError
-from .sweep import (read_toml, SweepLockedError, _flock, _now, _one_line, _read_sweep_table,
-                    _write_json, read_dask_table, read_sweep_file, sweep)
+from ..exceptions import ArchiveError, ContactpipeError, SceneError
+from ..exceptions import one_line as _one_line
+from ..files import (TEMP_SUFFIX, LockedError, atomic_path, exclusive_lock, read_toml, utc_now as _now,
+                     write_json as _write_json)
+from .sweep import SweepLockedError, _read_sweep_table, read_dask_table, read_sweep_file, sweep
 
 __all__ = ["run_pipeline", "read_pipeline_file", "PipelineSpec", "PipelineResult",
            "PipelineLockedError", "MEMBER_FIGURES", "FIGURES", "LOCK", "SUMMARY",
@@ -90,7 +91,7 @@ CLOSED_FORM = "closed_form"
 EXIT_LOCKED = 3
 
 
-class PipelineLockedError(ContactpipeError, BlockingIOError):
+class PipelineLockedError(LockedError):
     """Another pipeline run (or a sweep) holds the lock of the output folder."""
 
 
@@ -232,7 +233,7 @@ def read_pipeline_file(path) -> PipelineSpec:
         v = plot.get("variables", ["contact_area"])
         if isinstance(v, str):
             v = [v]
-        from .nomenclature import VARIABLES, SERIES
+        from ..nomenclature import VARIABLES, SERIES
         series = [k for k, e in VARIABLES.items() if e["dims"] == SERIES]
         if not isinstance(v, list) or not v or not all(isinstance(x, str) for x in v):
             problems.append(f"plot.variables must be a list of series names, got {v!r}")
@@ -308,30 +309,16 @@ def _fresh(product: pathlib.Path, inputs) -> bool:
     return True
 
 
-def _tmp_name(path: pathlib.Path) -> pathlib.Path:
-    """A hidden temporary sibling with the same suffix (writers infer the format)."""
-    return path.with_name(f".{path.stem}.{os.getpid()}-tmp{path.suffix}")
-
-
-@contextlib.contextmanager
 def _atomic(path: pathlib.Path):
-    """Yield a temporary path; rename it onto ``path`` when the block succeeds."""
+    """:func:`contactpipe.files.atomic_path` keeping the suffix (writers infer the format)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = _tmp_name(path)
-    try:
-        yield tmp
-        if not tmp.exists():
-            raise ContactpipeError(f"{path}: nothing was written")
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
+    return atomic_path(path, keep_suffix=True)
 
 
 def _clean_tmp(folder: pathlib.Path) -> None:
     """Remove temporaries a killed run left (we hold the lock)."""
     if folder.is_dir():
-        for p in folder.glob(".*-tmp.*"):
+        for p in folder.glob(f".*{TEMP_SUFFIX}*"):
             with contextlib.suppress(OSError):
                 p.unlink()
 
@@ -361,7 +348,7 @@ def _compare_member(mod, archive, reference, product):
 
 def _applies(kind: str, ds) -> bool:
     """Whether a member figure applies: the fretting loop needs a frictional archive with
-    a tangential load (as :func:`contactpipe.plot.standard_figures` decides)."""
+    a tangential load (as :func:`contactpipe.pipeline.plot.standard_figures` decides)."""
     if kind == "hysteresis":
         import numpy as np
         return all(v in ds for v in ("q1", "T1", "omega1")) and \
@@ -430,7 +417,7 @@ def run_pipeline(path, *, scheduler=None, progress=True, n_workers=None,
     spec = read_pipeline_file(path)
     out = spec.out
     out.mkdir(parents=True, exist_ok=True)
-    with _flock(out / LOCK, "pipeline run", error=PipelineLockedError):
+    with exclusive_lock(out / LOCK, "pipeline run", error=PipelineLockedError):
         try:
             return _run_locked(spec, scheduler=scheduler, progress=progress,
                                n_workers=n_workers, client=client, t0=t0)
@@ -488,7 +475,7 @@ def _run_locked(spec, *, scheduler, progress, n_workers, client, t0):
                                    "error": _one_line(err)})
         if kinds:
             try:
-                from .archive import open_archive
+                from ..archive import open_archive
                 ds = open_archive(archive)
                 try:
                     w, cur, na = _member_figures(plot_mod, ds, archive, figdir, digest,

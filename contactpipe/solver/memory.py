@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .materials import ExponentialCreep
+from ..materials import ExponentialCreep
 
 __all__ = ["RecursiveMemory", "DirectMemory", "make_memory", "TIME_RULES"]
 

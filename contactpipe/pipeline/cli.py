@@ -15,17 +15,18 @@ import importlib
 import pathlib
 import sys
 
-from .exceptions import ArchiveError, ContactpipeError, SceneError
+from .._version import __version__
+from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line
 
 __all__ = ["main", "build_parser"]
 
 STAGES = {
     # name: (module, one-line help)
-    "sweep": ("contactpipe.sweep", "run a parameter sweep on dask (resumable)"),
-    "compare": ("contactpipe.compare", "compare archives with closed forms or each other"),
-    "plot": ("contactpipe.plot", "standard figures of an archive or a sweep"),
-    "pipeline": ("contactpipe.pipeline", "sweep -> compare -> plot, idempotent, cron-safe"),
-    "bench": ("contactpipe.bench", "print solver speed figures (FFT pairs, iterations, time)"),
+    "sweep": ("contactpipe.pipeline.sweep", "run a parameter sweep on dask (resumable)"),
+    "compare": ("contactpipe.pipeline.compare", "compare archives with closed forms or each other"),
+    "plot": ("contactpipe.pipeline.plot", "standard figures of an archive or a sweep"),
+    "pipeline": ("contactpipe.pipeline.run", "sweep -> compare -> plot, idempotent, cron-safe"),
+    "bench": ("contactpipe.pipeline.bench", "print solver speed figures (FFT pairs, iterations, time)"),
 }
 
 
@@ -49,8 +50,8 @@ def _add_run(sub):
 
 
 def _run(args) -> int:
-    from .scene import Scene
-    from .simulate import simulate
+    from ..scene import Scene
+    from ..simulation import simulate
     scene = Scene.from_toml(args.scene)
     tangential = None if args.tangential in (None, "auto") else args.tangential
     args.output.parent.mkdir(parents=True, exist_ok=True)
@@ -67,7 +68,6 @@ def _run(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
     parser = argparse.ArgumentParser(
         prog="contactpipe",
         description="Frictional stick-slip contact of elastic and viscoelastic bodies.")
@@ -87,11 +87,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    return text if text else type(err).__name__
-
-
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -106,12 +101,12 @@ def main(argv=None) -> int:
     except (SceneError, FileNotFoundError, IsADirectoryError) as err:
         if args.debug:
             raise
-        print(f"contactpipe: error: {_one_line(err)}", file=sys.stderr)
+        print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
         return 2
     except (ContactpipeError, ArchiveError, ValueError, OSError) as err:
         if args.debug:
             raise
-        print(f"contactpipe: error: {type(err).__name__}: {_one_line(err)}", file=sys.stderr)
+        print(f"contactpipe: error: {one_line(err)}", file=sys.stderr)
         return 1
 
 

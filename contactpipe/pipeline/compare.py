@@ -49,13 +49,13 @@ import argparse
 import math
 import os
 import pathlib
-import secrets
 
 import numpy as np
 import xarray as xr
 
-from . import analytic
-from .exceptions import ArchiveError, SceneError
+from .. import analytic
+from ..exceptions import ArchiveError, SceneError
+from ..files import atomic_path
 
 __all__ = ["closed_form_for", "compare", "ClosedForm", "closed_form_solution",
            "load_dataset", "add_arguments", "main", "CLOSED_FORMS"]
@@ -85,7 +85,7 @@ def load_dataset(archive) -> tuple[xr.Dataset, str]:
     if isinstance(archive, xr.Dataset):
         return archive, str(archive.attrs.get("title", "dataset"))
     if isinstance(archive, (str, os.PathLike)):
-        from .archive import open_archive
+        from ..archive import open_archive
         return open_archive(archive), str(archive)
     raise ArchiveError(f"expected an archive path or an xarray.Dataset, got "
                        f"{type(archive).__name__}")
@@ -93,7 +93,7 @@ def load_dataset(archive) -> tuple[xr.Dataset, str]:
 
 def _scene_of(ds):
     """The Scene of an archive (or a Scene, or a path)."""
-    from .scene import Scene
+    from ..scene import Scene
     if isinstance(ds, Scene):
         return ds
     if isinstance(ds, (str, os.PathLike)):
@@ -117,7 +117,7 @@ def _load_facts(scene):
 
 def _diagnose(scene) -> tuple[str | None, dict]:
     """The closed form a scene admits, and for each candidate why it does not apply."""
-    from .plan import pair_couples
+    from ..planning import pair_couples
     b1, b2, t, W, T1, T2 = _load_facts(scene)
     shape = scene.geometry.shape
     mu = float(scene.friction.mu)
@@ -280,7 +280,7 @@ class ClosedForm:
     """
 
     def __init__(self, name, scene, ds):
-        from .materials import composite_modulus
+        from ..materials import composite_modulus
         self.name = name
         self.scene = scene
         self.times = np.asarray(ds["time"].values, float)
@@ -863,17 +863,6 @@ def _summary(table) -> str:
 
 # --------------------------------------------------------------------------- output
 
-def _atomic(path: pathlib.Path, write):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.part")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
 def write_table(table: xr.Dataset, out) -> pathlib.Path:
     """Write an error table atomically: netCDF for ``.nc``, CSV for ``.csv``.
 
@@ -882,8 +871,11 @@ def write_table(table: xr.Dataset, out) -> pathlib.Path:
     """
     out = pathlib.Path(out)
     suffix = out.suffix.lower()
+    if suffix in (".nc", ".csv"):
+        out.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".nc":
-        _atomic(out, lambda tmp: table.to_netcdf(tmp, engine="netcdf4"))
+        with atomic_path(out) as tmp:
+            table.to_netcdf(tmp, engine="netcdf4")
     elif suffix == ".csv":
         def write(tmp):
             lines = [f"# {k}: {_attr_text(v)}" for k, v in table.attrs.items()]
@@ -894,7 +886,8 @@ def write_table(table: xr.Dataset, out) -> pathlib.Path:
             with open(tmp, "w", encoding="utf-8", newline="") as f:
                 f.write("\n".join(lines) + "\n")
                 frame.to_csv(f, float_format="%.10g")
-        _atomic(out, write)
+        with atomic_path(out) as tmp:
+            write(tmp)
     else:
         raise ArchiveError(f"{out}: the error table is written as netCDF (.nc) or CSV "
                            f"(.csv), got suffix {out.suffix!r}")

@@ -20,16 +20,15 @@ from __future__ import annotations
 import argparse
 import itertools
 import math
-import os
 import pathlib
-import secrets
 
 import numpy as np
 import xarray as xr
 
 from .compare import (ClosedForm, _grid, _radius, _scene_of, closed_form_for,
                       closed_form_solution, load_dataset)
-from .exceptions import ArchiveError, ContactpipeError
+from ..exceptions import ArchiveError, ContactpipeError
+from ..files import atomic_path
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
            "standard_figures", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS"]
@@ -59,13 +58,8 @@ def _save(fig, path) -> pathlib.Path:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)     # tight layout on odd axes
         fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.part")
-    try:
+    with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=DPI)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path
 
 
@@ -109,8 +103,8 @@ def _scales(ds):
     pressure W / (pi a^2) and the punch radius; a surface: the largest pressure and the
     radius of the largest contact area.
     """
-    from . import analytic
-    from .materials import composite_modulus
+    from .. import analytic
+    from ..materials import composite_modulus
     try:
         scene = _scene_of(ds)
     except ArchiveError:
@@ -311,7 +305,7 @@ def plot_profiles(ds, path, instants=None, *, closed_form=True) -> pathlib.Path:
         Default: about five instants spread over the run, the turning points of T1
         included.
     closed_form : bool
-        Draw the closed form in grey where :func:`contactpipe.compare.closed_form_for`
+        Draw the closed form in grey where :func:`contactpipe.pipeline.compare.closed_form_for`
         gives one.
 
     Returns
@@ -555,7 +549,7 @@ def plot_sweep(sw, path, variable="contact_area", x="time") -> pathlib.Path:
         label = _member_label(sw, sel)
         ax.plot(xv, yv, "-", marker="o" if yv.size <= 30 else None, ms=3, lw=1.2,
                 color=f"C{n % 10}", label=label)
-    from .nomenclature import VARIABLES
+    from ..nomenclature import VARIABLES
     known = VARIABLES.get(variable, {})
     units = sw[variable].attrs.get("units", known.get("units", ""))
     long = sw[variable].attrs.get("long_name", known.get("long_name", variable))

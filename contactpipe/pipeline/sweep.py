@@ -33,7 +33,7 @@ Files in ``out_dir``
 --------------------
 ``<digest>.nc``
     One archive per member, named by :meth:`Scene.digest` (members with the same scene
-    share it). Written atomically by :func:`~contactpipe.simulate`.
+    share it). Written atomically by :func:`~contactpipe.simulation`.
 ``manifest.json``
     Axes, mode, dimension names, the base scene (TOML) and, per member, its axis values,
     digest, file, status (``done`` / ``failed`` with a one-line error / ``pending``) and
@@ -87,8 +87,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import datetime
-import errno
 import itertools
 import json
 import math
@@ -97,21 +95,13 @@ import os
 import pathlib
 import sys
 import time as _time
-import tomllib
 from typing import Callable
 
-from .exceptions import ArchiveError, ContactpipeError, SceneError
+from .._version import __version__
+from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line as _one_line
+from ..files import (LockedError, TEMP_SUFFIX, exclusive_lock, read_toml,
+                     utc_now as _now, write_json as _write_json)
 
-
-def read_toml(path, what) -> dict:
-    """A TOML file as a dict; SceneError naming the file if it is not valid UTF-8 TOML."""
-    path = pathlib.Path(path)
-    with open(path, "rb") as f:
-        raw = f.read()
-    try:
-        return tomllib.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
-        raise SceneError(f"{path} is not a valid TOML {what} file: {err}") from None
 
 __all__ = ["sweep", "open_sweep", "SweepResult", "Member", "SweepLockedError",
            "register_parameter", "derived_parameters", "relaxation_time", "with_window",
@@ -126,7 +116,7 @@ MANIFEST_FORMAT = 1
 _MAX_PROBLEMS = 25
 
 
-class SweepLockedError(ContactpipeError, BlockingIOError):
+class SweepLockedError(LockedError):
     """Another sweep (or pipeline) holds the lock of this output folder."""
 
 
@@ -143,7 +133,7 @@ def register_parameter(name: str):
     :class:`~contactpipe.SceneError` (or ``ValueError``) for a value it cannot take; the
     sweep reports it with the axis and value.
 
-    >>> from contactpipe.sweep import register_parameter
+    >>> from contactpipe.pipeline.sweep import register_parameter
     >>> @register_parameter("load_scale")
     ... def load_scale(scene, value):
     ...     return scene.replace({"load.normal_force": value * scene.load.normal_force})
@@ -347,7 +337,7 @@ _RESERVED = None
 def _reserved() -> set:
     global _RESERVED
     if _RESERVED is None:
-        from .nomenclature import COORDINATES, VARIABLES
+        from ..nomenclature import COORDINATES, VARIABLES
         _RESERVED = {"time", "t_norm", "x1", "x2", "member", "digest"} | set(VARIABLES) \
             | set(COORDINATES)
     return _RESERVED
@@ -408,7 +398,7 @@ def _parse_axes(axes) -> tuple[list, dict, dict]:
 
 def _build_members(base, axes, mode):
     """Every member scene, validated; SceneError naming axis and value on any problem."""
-    from .scene import Scene
+    from ..scene import Scene
     if mode not in MODES:
         raise SceneError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
     names, values, funcs = _parse_axes(axes)
@@ -483,59 +473,13 @@ def _build_members(base, axes, mode):
 
 # ------------------------------------------------------------------- files
 
-@contextlib.contextmanager
-def _flock(path: pathlib.Path, what: str, error=None):
-    """Hold an exclusive non-blocking flock on ``path`` (created if needed)."""
-    import fcntl
-    error = error or SweepLockedError
-    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as err:
-            if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                raise
-            try:
-                holder = os.pread(fd, 200, 0).decode("utf-8", "replace").strip()
-            except OSError:
-                holder = ""
-            who = f" ({holder})" if holder else ""
-            raise error(f"another {what} holds the lock {path}{who}: wait for it to "
-                        f"finish or use another folder") from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"pid {os.getpid()} since {_now()}\n".encode(), 0)
-        yield
-    finally:
-        os.close(fd)          # releases the lock
-
-
-def _now() -> str:
-    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-
-
-def _write_json(path: pathlib.Path, data) -> None:
-    """Atomic JSON write: hidden temporary file, fsync, os.replace."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump(data, f, indent=1, allow_nan=False)
-            f.write("\n")
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
-
-
 def _clean_temporaries(out_dir: pathlib.Path, members) -> list:
     """Remove what a killed run left: ``.<digest>.nc.*.part`` and manifest temps.
 
     Only called under the folder's lock, so no live writer of ours owns them.
     """
     removed = []
-    patterns = {f".{m.file}.*.part" for m in members} | {f".{MANIFEST}.*.tmp"}
+    patterns = {f".{m.file}.*{TEMP_SUFFIX}*" for m in members} | {f".{MANIFEST}.*{TEMP_SUFFIX}*"}
     for pattern in sorted(patterns):
         for p in out_dir.glob(pattern):
             with contextlib.suppress(OSError):
@@ -546,7 +490,7 @@ def _clean_temporaries(out_dir: pathlib.Path, members) -> list:
 
 def _archive_state(path: pathlib.Path):
     """('valid', wall time) | ('missing', None) | ('corrupt', reason)."""
-    from .archive import is_complete, open_archive
+    from ..archive import is_complete, open_archive
     if not path.exists():
         return "missing", None
     if is_complete(path):
@@ -599,7 +543,7 @@ def _run_member(scene, path: str, digest: str, retries: int = 0) -> dict:
     Failures of the scene itself (ContactpipeError: no convergence, contact off the grid,
     ...) are final; other errors (disk, memory) are tried again ``retries`` times.
     """
-    from .simulate import simulate
+    from ..simulation import simulate
     t0, c0 = _time.perf_counter(), _time.process_time()
     attempt = 0
     while True:
@@ -615,11 +559,6 @@ def _run_member(scene, path: str, digest: str, retries: int = 0) -> dict:
         return {"digest": digest, "status": status, "error": error, "attempts": attempt,
                 "wall_time_s": _time.perf_counter() - t0,
                 "cpu_time_s": _time.process_time() - c0}
-
-
-def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
 def _cpu_count() -> int:
@@ -744,7 +683,7 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
     SweepLockedError
         Another sweep is running on ``out_dir``.
     """
-    from .scene import Scene
+    from ..scene import Scene
     t0 = _time.perf_counter()
     if not isinstance(base, Scene):
         base = Scene.from_toml(base)
@@ -753,7 +692,7 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
     dims = _dim_names(names)
     out_dir = pathlib.Path(out_dir).expanduser().resolve()
     out_dir.mkdir(parents=True, exist_ok=True)
-    with _flock(out_dir / LOCK, "sweep"):
+    with exclusive_lock(out_dir / LOCK, "sweep", error=SweepLockedError):
         _clean_temporaries(out_dir, members)
         by_digest: dict[str, list] = {}
         for m in members:
@@ -776,7 +715,7 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
             jobs.append((digest, group[0].scene, str(path)))
         manifest = {
             "format": MANIFEST_FORMAT,
-            "contactpipe_version": _version(),
+            "contactpipe_version": __version__,
             "created": created or _now(),
             "updated": _now(),
             "mode": mode,
@@ -832,11 +771,6 @@ def _func_name(func) -> str:
     return f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(func))}"
 
 
-def _version() -> str:
-    from . import __version__
-    return str(__version__)
-
-
 # ------------------------------------------------------------------- reading back
 
 def open_sweep(out_dir, *, allow_missing=False, chunks=None):
@@ -878,8 +812,8 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None):
     """
     import numpy as np
     import xarray as xr
-    from .archive import open_archive
-    from .nomenclature import cf_attrs
+    from ..archive import open_archive
+    from ..nomenclature import cf_attrs
 
     out_dir = pathlib.Path(out_dir)
     manifest = read_manifest(out_dir)
@@ -1086,7 +1020,7 @@ def read_dask_table(raw, where: str, problems: list) -> dict:
 def _read_sweep_table(d: dict, where: str, base_dir: pathlib.Path, problems: list,
                       allowed=_SWEEP_KEYS):
     """(base Scene or None, axes, mode) from a sweep table; problems appended."""
-    from .scene import Scene
+    from ..scene import Scene
     for k in d:
         if k not in allowed:
             problems.append(f"unknown key {where}{k}; allowed keys: {', '.join(allowed)}")

@@ -80,7 +80,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .exceptions import SceneError
+from ..exceptions import SceneError
 
 __all__ = ["KEYS", "IN_PLANE_KEYS", "NORMAL_KEYS", "COUPLING_KEYS", "cell_influence",
            "offset_grid", "body_kernels", "pair_kernels"]

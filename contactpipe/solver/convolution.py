@@ -3,7 +3,7 @@
 Liu, Wang & Liu (2000), "A versatile method of discrete convolution and FFT (DC-FFT) for
 contact analyses", Wear 243, 101-111. The N1 x N2 traction field is zero-padded to
 M1 x M2 = 2N1 x 2N2; kernels are laid out in wrap-around order on that padded grid
-(:func:`contactpipe.influence.body_kernels`) and their real-FFT spectra are computed
+(:func:`contactpipe.solver.influence.body_kernels`) and their real-FFT spectra are computed
 once per grid and material pair and reused by every iteration and time step.
 
 The cost unit reported everywhere in contactpipe is one *FFT pair*: one forward plus one

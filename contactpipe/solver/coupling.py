@@ -19,50 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import box_cg
+from .normal import NormalResult, solve_normal
 from .tangential import solve_scalar, solve_vector
 
-__all__ = ["NormalResult", "InstantResult", "solve_normal", "solve_instant"]
-
-
-@dataclass
-class NormalResult:
-    p: np.ndarray          # pressure [Pa]
-    omega3: float          # normal approach [m]
-    Ap: np.ndarray         # K33 ⊛ p [m]
-    iterations: int
-    residual: float
-    converged: bool
-
-
-def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None) -> NormalResult:
-    """Frictionless normal problem under force control (Polonsky & Keer 1999).
-
-    Parameters
-    ----------
-    op : ContactOperator
-    gap0 : ndarray
-        Initial gap plus every known normal displacement [m].
-    W : float
-        Normal force [N].
-    p0 : ndarray
-        Warm start [Pa].
-    Ap0 : ndarray, optional
-        K33 ⊛ p0 when known (saves one FFT pair).
-    """
-    if W <= 0.0:
-        return NormalResult(np.zeros_like(gap0), float(gap0.min()), np.zeros_like(gap0), 0,
-                            0.0, True)
-    if op.rigid:
-        # no compliance for this increment (e.g. Kelvin-Voigt at the instant of a step load):
-        # the load goes to the cells of least gap, the discrete form of a concentrated force
-        lowest = gap0 <= gap0.min() + 1e-12 * max(np.ptp(gap0), 1e-300)
-        p = np.where(lowest, W / (cell_area * np.count_nonzero(lowest)), 0.0)
-        return NormalResult(p, float(gap0.min()), np.zeros_like(gap0), 0, 0.0, True)
-    res = box_cg(op.normal, gap0, np.zeros_like(gap0), np.full_like(gap0, np.inf),
-                 W / cell_area, p0, tol=tol, max_iter=max_iter, restore="scale", Ax0=Ap0)
-    return NormalResult(res.x, res.multiplier, res.Ax, res.iterations, res.residual,
-                        res.converged)
+__all__ = ["InstantResult", "solve_instant"]
 
 
 @dataclass

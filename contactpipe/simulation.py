@@ -2,9 +2,9 @@
 
 At every instant t_k of the uniform mesh:
 
-1. the viscoelastic history of each body (its Boltzmann sum, :mod:`contactpipe.memory`)
+1. the viscoelastic history of each body (its Boltzmann sum, :mod:`contactpipe.solver.memory`)
    gives a known relative displacement, one spatial convolution per body and step;
-2. the instantaneous contact (:func:`contactpipe.coupling.solve_instant`) finds p, q, the
+2. the instantaneous contact (:func:`contactpipe.solver.coupling.solve_instant`) finds p, q, the
    contact and stick areas and the rigid motions, warm-started from the previous instant;
 3. slip, dissipation and status follow; the instant is streamed to the archive (every
    ``output.stride``-th instant and the last one) and committed to the memory.
@@ -22,13 +22,14 @@ import time as _time
 
 import numpy as np
 
-from .coupling import solve_instant
+from .solver.coupling import solve_instant
 from .exceptions import ConvergenceError, GridError, GrossSlidingError
+from .files import atomic_path
 from .accuracy import resolve_accuracy
-from .memory import make_memory
-from .operator import (ContactOperator, body_spectra, convolver, history_displacement,
+from .solver.memory import make_memory
+from .solver.operator import (ContactOperator, body_spectra, convolver, history_displacement,
                        history_kernels)
-from .plan import plan as make_plan
+from .planning import plan as make_plan
 
 __all__ = ["simulate", "grid_coordinates"]
 
@@ -73,7 +74,7 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     progress : bool
         Show a progress bar over the time steps.
     tangential, coupling : str, optional
-        Overrides of the inferred sub-models (:func:`contactpipe.plan.plan`), checked
+        Overrides of the inferred sub-models (:func:`contactpipe.planning.plan`), checked
         against the scene.
     fft, threads : optional
         Override ``solver.fft`` and ``solver.threads``.
@@ -333,16 +334,14 @@ class _Checkpoint:
         return state
 
     def save(self, k, written, p, q, u, s, omega, dissipation, mems):
-        import os
         arrays = {"digest": np.array(self.digest), "k": np.array(k),
                   "written": np.array(written), "p": p, "q": q, "u": u, "s": s,
                   "omega": omega, "dissipation": np.array(dissipation)}
         for i, m in enumerate(mems):
             if m is not None:
                 arrays.update({f"mem{i}_{key}": np.asarray(v) for key, v in m.state().items()})
-        tmp = self.file.with_name(self.file.name + ".tmp.npz")
-        np.savez(tmp, **arrays)
-        os.replace(tmp, self.file)
+        with atomic_path(self.file) as tmp, open(tmp, "wb") as f:
+            np.savez(f, **arrays)
 
     def remove(self):
         self.file.unlink(missing_ok=True)

@@ -16,7 +16,7 @@ whose residual is −Δs.
 Two forms:
 
 * ``scalar`` — the Cattaneo-Mindlin form: q2 = 0, a two-sided bound −μp ≤ q1 ≤ μp, solved
-  by the bound-constrained CG of :mod:`contactpipe.cg` (one FFT pair per iteration).
+  by the bound-constrained CG of :mod:`contactpipe.solver.cg` (one FFT pair per iteration).
   An approximation (it neglects the x2 slip condition, so s2 = 0 by construction): the
   neglected q2 is small when the load is along x1 (test_tangential measures it).
 * ``vector`` — the full problem with a disk |q| ≤ μp per cell: projected conjugate

@@ -1,0 +1,62 @@
+"""Closed-form contact solutions, for users and for the validation tests.
+
+Everything is in SI units (m, N, Pa, s, J) and follows ``docs/conventions.md``:
+``p > 0`` presses body 2, tangential tractions ``q`` have the sign of the applied
+tangential force ``T`` (acting along x1), and the tangential rigid displacement
+``omega1`` of body 1 relative to body 2 has the sign of ``T``.
+
+Contents
+--------
+Normal contact (elastic)
+    :func:`composite_modulus`, :func:`hertz_sphere`, :func:`hertz_ellipsoid`,
+    :func:`flat_punch`.
+Tangential contact (elastic, Hertzian normal pressure, no coupling: beta = 0)
+    :func:`cattaneo_mindlin` (monotonic loading),
+    :func:`masing_memory`, :func:`mindlin_deresiewicz_traction`, :func:`stick_radius`,
+    :func:`tangential_displacement`, :func:`energy_per_cycle` (arbitrary
+    piecewise-monotonic history, Mindlin-Deresiewicz / Masing / Jaeger rule),
+    :func:`tangential_compliance_sum`.
+Viscoelastic normal contact (rigid sphere, Lee-Radok)
+    :func:`lee_radok_sphere`, :func:`lee_radok_radius`, :func:`relaxation_function`,
+    :func:`lee_radok_pressure`.
+Utility
+    :func:`cell_average` (Gauss-Legendre average of a closed-form field over grid cells).
+
+References
+----------
+.. [J85] K. L. Johnson, *Contact Mechanics*, Cambridge University Press, 1985:
+   ch. 3 (pressure distributions on a half-space), §4.2 (Hertz), §7.2-7.3
+   (Cattaneo, Mindlin, Mindlin-Deresiewicz; energy loss per cycle eq. 7.64).
+.. [MD53] R. D. Mindlin, H. Deresiewicz, "Elastic spheres in contact under varying
+   oblique forces", J. Appl. Mech. 20 (1953) 327-344.
+.. [LR60] E. H. Lee, J. R. M. Radok, "The contact problem for viscoelastic bodies",
+   J. Appl. Mech. 27 (1960) 438-444.
+.. [T66] T. C. T. Ting, "The contact stresses between a rigid indenter and a
+   viscoelastic half-space", J. Appl. Mech. 33 (1966) 845-854.
+.. [S65] I. N. Sneddon, "The relation between load and penetration in the
+   axisymmetric Boussinesq problem for a punch of arbitrary profile",
+   Int. J. Eng. Sci. 3 (1965) 47-57.
+.. [Ja98] J. Jaeger, "A new principle in contact mechanics", J. Tribol. 120 (1998)
+   677-684 (superposition of Cattaneo distributions for load histories).
+"""
+from __future__ import annotations
+
+from ._common import cell_average, composite_modulus, tangential_compliance_sum
+from .hertz import (FlatPunch, HertzEllipsoid, HertzSphere, flat_punch, hertz_ellipsoid,
+                    hertz_sphere)
+from .mindlin import (CattaneoMindlin, cattaneo_mindlin, energy_per_cycle, masing_memory,
+                      mindlin_deresiewicz_traction, stick_radius, tangential_displacement)
+from .lee_radok import (LeeRadokContact, lee_radok_pressure, lee_radok_radius,
+                        lee_radok_sphere, relaxation_function)
+
+__all__ = [
+    "composite_modulus", "tangential_compliance_sum",
+    "HertzSphere", "hertz_sphere", "HertzEllipsoid", "hertz_ellipsoid",
+    "FlatPunch", "flat_punch",
+    "CattaneoMindlin", "cattaneo_mindlin",
+    "masing_memory", "mindlin_deresiewicz_traction", "stick_radius",
+    "tangential_displacement", "energy_per_cycle",
+    "LeeRadokContact", "lee_radok_sphere", "lee_radok_radius", "relaxation_function",
+    "lee_radok_pressure",
+    "cell_average",
+]

@@ -1,0 +1,353 @@
+"""Tangential contact of elastic spheres: Cattaneo-Mindlin and Mindlin-Deresiewicz.
+
+Hertzian normal pressure, no normal-tangential coupling (Dundurs beta = 0), load along x1.
+References: Johnson (1985) §7.2-7.3; Mindlin & Deresiewicz (1953); Jaeger (1998) for
+histories by superposition (Masing). SI units.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import GrossSlidingError
+from ._common import sqrt_plus
+
+__all__ = ["CattaneoMindlin", "cattaneo_mindlin", "masing_memory",
+           "mindlin_deresiewicz_traction", "stick_radius", "tangential_displacement",
+           "energy_per_cycle"]
+
+
+# --------------------------------------------------------------------------- Cattaneo
+def _check_partial_slip(t, mu_w):
+    if not mu_w > 0:
+        raise ValueError(f"mu W must be > 0 [N], got {mu_w!r}")
+    t = np.asarray(t, float)
+    if np.any(np.abs(t) > mu_w * (1.0 + 1e-12)):
+        raise GrossSlidingError(
+            f"|T| = {np.max(np.abs(t)):.6g} N exceeds mu W = {mu_w:.6g} N: gross sliding, "
+            "no partial-slip solution")
+
+
+def _circle(force, mu_w, a):
+    """Stick radius of a Cattaneo distribution carrying |force| [m]."""
+    return a * np.clip(1.0 - np.abs(force) / mu_w, 0.0, 1.0) ** (1.0 / 3.0)
+
+
+def _cattaneo_q(r, force, mu, mu_w, a, p0):
+    """Signed Cattaneo traction carrying ``force`` [N]: sign * mu p0/a [sqrt(a^2-r^2)
+    - sqrt(c^2-r^2)], c = a (1 - |force|/mu W)^(1/3)."""
+    c = _circle(force, mu_w, a)
+    return np.sign(force) * mu * p0 / a * (sqrt_plus(a, r) - sqrt_plus(c, r))
+
+
+@dataclass(frozen=True)
+class CattaneoMindlin:
+    """Cattaneo-Mindlin partial slip under a monotonically applied force T, [J85]_ §7.2.
+
+    Attributes
+    ----------
+    tangential_force : float
+        T [N] along x1, |T| <= mu W.
+    friction_coefficient : float
+        mu [1].
+    normal_force : float
+        W [N].
+    contact_radius : float
+        a [m].
+    max_pressure : float
+        p0 [Pa].
+    stick_radius : float
+        c = a (1 - |T| / (mu W))^(1/3) [m].
+    """
+
+    tangential_force: float
+    friction_coefficient: float
+    normal_force: float
+    contact_radius: float
+    max_pressure: float
+    stick_radius: float
+
+    def traction(self, r):
+        """q1(r) [Pa] = sign(T) mu p0/a [sqrt(a^2 - r^2) - sqrt(c^2 - r^2) (r < c)]."""
+        return _cattaneo_q(np.asarray(r, float), self.tangential_force,
+                           self.friction_coefficient,
+                           self.friction_coefficient * self.normal_force,
+                           self.contact_radius, self.max_pressure)
+
+
+def cattaneo_mindlin(tangential_force, friction_coefficient, normal_force,
+                     contact_radius, max_pressure) -> CattaneoMindlin:
+    """Cattaneo (1938) - Mindlin (1949) solution, monotonic loading 0 -> T.
+
+    ``c = a (1 - |T|/(mu W))^(1/3)`` and ``q(r) = mu p0/a [sqrt(a^2 - r^2) -
+    sqrt(c^2 - r^2)]`` ([J85]_ §7.2); q carries T because
+    ``int mu p0/a sqrt(c^2 - r^2) dA = mu W (c/a)^3``, which requires the Hertz
+    relation p0 = 3W / (2 pi a^2) between the inputs.
+
+    Parameters
+    ----------
+    tangential_force : float
+        T [N] along x1, |T| <= mu W (:class:`GrossSlidingError` otherwise).
+    friction_coefficient : float
+        mu [1].
+    normal_force : float
+        W [N].
+    contact_radius : float
+        Hertz contact radius a [m].
+    max_pressure : float
+        Hertz maximum pressure p0 [Pa].
+
+    Returns
+    -------
+    CattaneoMindlin
+    """
+    mu_w = friction_coefficient * normal_force
+    _check_partial_slip(tangential_force, mu_w)
+    return CattaneoMindlin(float(tangential_force), float(friction_coefficient),
+                           float(normal_force), float(contact_radius), float(max_pressure),
+                           float(_circle(tangential_force, mu_w, contact_radius)))
+
+
+# --------------------------------------------------------------------------- Mindlin-Deresiewicz
+def masing_memory(history):
+    """Reversal points still remembered after a tangential force history [N].
+
+    The body starts virgin at T = 0 and follows ``0 -> history[0] -> history[1] ...``,
+    linearly (hence monotonically) between samples. A reversal point is pushed when
+    the direction changes. Memory is wiped (Masing's rules, [MD53]_, [Ja98]_) when the
+    current branch, started at the last reversal T_n, passes the previous one
+    T_(n-1): the pair (T_(n-1), T_n) is erased and the branch continues the older
+    one. The first reversal T_1 (reached on the virgin curve) is erased when the
+    force reaches -T_1, after which the virgin curve is followed again.
+
+    Parameters
+    ----------
+    history : array_like
+        1-D tangential force samples [N], up to and including the current instant.
+
+    Returns
+    -------
+    reversals : tuple of float
+        Remembered reversal points (T_1, ..., T_n) [N] (empty on the virgin curve).
+    current : float
+        The current force T [N] (``history[-1]``, 0 for an empty history).
+    """
+    rev, t = (), 0.0
+    for rev, t in _memory_states(history):
+        pass
+    return rev, t
+
+
+def _memory_states(history):
+    """Yield (reversals, current force) after each sample of ``history``."""
+    stack: list = []
+    prev, direction = 0.0, 0
+    for t in np.atleast_1d(np.asarray(history, float)).ravel():
+        t = float(t)
+        if t != prev:
+            d = 1 if t > prev else -1
+            if direction != 0 and d != direction:
+                stack.append(prev)
+            direction = d
+            while True:
+                if len(stack) >= 2 and d * (t - stack[-2]) >= 0.0:
+                    del stack[-2:]
+                elif len(stack) == 1 and d * (t + stack[0]) >= 0.0:
+                    stack.pop()
+                else:
+                    break
+            prev = t
+        yield tuple(stack), prev
+
+
+def _masing_terms(history):
+    """(weight, force) of the superposed Cattaneo terms of the current state.
+
+    Virgin: [(1, T)]. Otherwise [(1, T_1), (2, (T_2 - T_1)/2), ...,
+    (2, (T - T_n)/2)]: each reversal adds twice the monotonic solution for half the
+    force change since that reversal.
+    """
+    return _terms_of_state(*masing_memory(history))
+
+
+def _terms_of_state(rev, t):
+    if not rev:
+        return [(1.0, t)]
+    points = list(rev) + [t]
+    terms = [(1.0, rev[0])]
+    for k in range(len(points) - 1):
+        terms.append((2.0, 0.5 * (points[k + 1] - points[k])))
+    return terms
+
+
+def mindlin_deresiewicz_traction(r, history, friction_coefficient, normal_force,
+                                 contact_radius, max_pressure):
+    """Tangential traction q1(r) [Pa] at the last instant of a force history.
+
+    Superposition of Cattaneo distributions ([MD53]_, [J85]_ §7.3, [Ja98]_): with
+    ``C(r; F) = sign(F) mu p0/a [sqrt(a^2 - r^2) - sqrt(c(F)^2 - r^2)]``,
+    ``c(F) = a (1 - |F|/mu W)^(1/3)`` (the monotonic solution carrying F),
+
+    * virgin loading 0 -> T: ``q = C(r; T)``;
+    * after reversals T_1 .. T_n (see :func:`masing_memory`):
+      ``q = C(r; T_1) + sum_k 2 C(r; (T_(k+1) - T_k)/2)`` with T_(n+1) = T.
+
+    E.g. unloading from T* > 0 to T: with c* = c(T*), c' = a(1 - (T* - T)/(2 mu W))^(1/3),
+    ``q = -mu p0/a [sqrt(a^2 - r^2) - 2 sqrt(c'^2 - r^2) + sqrt(c*^2 - r^2)]``, which
+    carries T ([J85]_ §7.3; the minus sign is that of an unloading increment:
+    q = -mu p in the new slip annulus c' < r < a).
+
+    Parameters
+    ----------
+    r : array_like
+        Radii [m].
+    history : array_like
+        Tangential force samples T [N] (along x1), up to the current instant; the
+        body starts virgin at T = 0. All |T| <= mu W.
+    friction_coefficient : float
+        mu [1].
+    normal_force : float
+        W [N].
+    contact_radius : float
+        Hertz contact radius a [m].
+    max_pressure : float
+        Hertz maximum pressure p0 = 3W/(2 pi a^2) [Pa].
+
+    Returns
+    -------
+    ndarray
+        q1(r) [Pa], with the sign convention of ``docs/conventions.md``.
+    """
+    mu_w = friction_coefficient * normal_force
+    _check_partial_slip(history, mu_w)
+    r = np.asarray(r, float)
+    q = np.zeros(r.shape)
+    for w, f in _masing_terms(history):
+        q = q + w * _cattaneo_q(r, f, friction_coefficient, mu_w, contact_radius,
+                                max_pressure)
+    return q
+
+
+def stick_radius(history, friction_coefficient, normal_force, contact_radius) -> float:
+    """Radius of the current stick zone [m] after a tangential force history.
+
+    The slip annulus of the current branch is ``c_cur < r < a`` with
+    ``c_cur = a (1 - |T|/mu W)^(1/3)`` on the virgin curve and
+    ``c_cur = a (1 - |T - T_n|/(2 mu W))^(1/3)`` after the last remembered reversal T_n.
+    Inside c_cur nothing slips in the current increment (stick, Delta s = 0).
+    ``c_cur`` is the largest of the circles of the remembered branches; the smallest
+    (that of the first term) bounds the zone that has never slipped. Equals ``a``
+    exactly at a reversal.
+
+    Parameters
+    ----------
+    history : array_like
+        Tangential force samples [N] (see :func:`mindlin_deresiewicz_traction`).
+    friction_coefficient : float
+        mu [1].
+    normal_force : float
+        W [N].
+    contact_radius : float
+        a [m].
+
+    Returns
+    -------
+    float
+        c_cur [m].
+    """
+    mu_w = friction_coefficient * normal_force
+    _check_partial_slip(history, mu_w)
+    _, f = _masing_terms(history)[-1]
+    return float(_circle(f, mu_w, contact_radius))
+
+
+def _mindlin_delta(force, mu_w, a, compliance_sum):
+    """Signed monotonic (virgin) displacement: 3 mu W C/(16 a) [1 - (1 - |F|/mu W)^(2/3)]."""
+    x = np.clip(1.0 - np.abs(force) / mu_w, 0.0, 1.0)
+    return np.sign(force) * 3.0 * mu_w * compliance_sum / (16.0 * a) * (1.0 - x ** (2.0 / 3.0))
+
+
+def tangential_displacement(history, friction_coefficient, normal_force, contact_radius,
+                            compliance_sum, all_instants: bool = False):
+    """Tangential rigid displacement omega1 [m] of body 1 relative to body 2.
+
+    Mindlin's virgin curve ([J85]_ §7.2)
+    ``delta(T) = 3 mu W/(16 a) * compliance_sum * [1 - (1 - T/mu W)^(2/3)]``
+    and its Masing branches ([MD53]_, [J85]_ §7.3): with the remembered
+    reversals T_1 .. T_n, ``delta = delta(T_1) + sum_k 2 delta((T_(k+1) - T_k)/2)``,
+    e.g. ``delta = delta* - 2 delta((T* - T)/2)`` on unloading from T*.
+
+    Parameters
+    ----------
+    history : array_like
+        Tangential force samples T [N], body virgin at T = 0, |T| <= mu W.
+    friction_coefficient : float
+        mu [1].
+    normal_force : float
+        W [N].
+    contact_radius : float
+        Hertz contact radius a [m].
+    compliance_sum : float
+        ``(2 - nu1)/G1 + (2 - nu2)/G2`` [1/Pa] (0 for two rigid bodies), see
+        :func:`tangential_compliance_sum`.
+    all_instants : bool, optional
+        Return the displacement at every sample of ``history`` (one pass) instead of
+        at the last one only.
+
+    Returns
+    -------
+    float or ndarray
+        omega1 [m], same sign as T on the virgin curve.
+    """
+    mu_w = friction_coefficient * normal_force
+    hist = np.atleast_1d(np.asarray(history, float)).ravel()
+    _check_partial_slip(hist, mu_w)
+
+    def value(state):
+        return float(sum(w * _mindlin_delta(f, mu_w, contact_radius, compliance_sum)
+                         for w, f in _terms_of_state(*state)))
+
+    if not all_instants:
+        return value(masing_memory(hist))
+    return np.array([value(state) for state in _memory_states(hist)])
+
+
+def energy_per_cycle(amplitude, friction_coefficient, normal_force, contact_radius,
+                     compliance_sum) -> float:
+    """Energy dissipated per full cycle T = +-T* [J] (area of the delta-T loop).
+
+    Integrating the Masing branches, ``E = 4 T* delta(T*) - 8 int_0^T* delta(x) dx``,
+    which gives (cf. [J85]_ eq. 7.64, [MD53]_), with tau = T*/(mu W),
+
+    ``E = 9 mu^2 W^2 C / (10 a) * [1 - (1 - tau)^(5/3) - (5 tau / 6)(1 + (1 - tau)^(2/3))]``
+
+    where C is ``compliance_sum``. For small amplitude ``E ~ C T*^3 / (36 a mu W)``.
+
+    Parameters
+    ----------
+    amplitude : float
+        T* [N], 0 <= T* <= mu W.
+    friction_coefficient : float
+        mu [1].
+    normal_force : float
+        W [N].
+    contact_radius : float
+        Hertz contact radius a [m].
+    compliance_sum : float
+        ``(2 - nu1)/G1 + (2 - nu2)/G2`` [1/Pa].
+
+    Returns
+    -------
+    float
+        Dissipated energy per cycle [J].
+    """
+    mu_w = friction_coefficient * normal_force
+    amplitude = abs(float(amplitude))
+    _check_partial_slip(amplitude, mu_w)
+    tau = amplitude / mu_w
+    s = max(1.0 - tau, 0.0)
+    bracket = 1.0 - s ** (5.0 / 3.0) - 5.0 * tau / 6.0 * (1.0 + s ** (2.0 / 3.0))
+    return float(9.0 * mu_w ** 2 * compliance_sum / (10.0 * contact_radius) * bracket)
+
+

@@ -1,0 +1,266 @@
+"""One helper for each file chore: atomic writes, locks, TOML reading, output-path checks.
+
+Every writer and reader of contactpipe goes through these, so the policy is stated once:
+
+* :func:`atomic_path` - write to a hidden temporary file beside the target
+  (``.NAME.<pid>-<token>.part``), then fsync it, ``os.replace`` it onto the target and
+  fsync the folder. On any exception (Ctrl-C included) the temporary file is removed and
+  the target is untouched: a reader sees the old file or the new one, never half of one.
+* :func:`exclusive_lock` - a non-blocking exclusive lock on a file (``filelock``:
+  ``flock`` on Unix, ``msvcrt`` on Windows); a second holder gets an error at once,
+  naming who holds it.
+* :func:`read_toml` / :func:`loads_toml` - TOML as a dict (``tomllib``, or ``tomli`` on
+  Python 3.10), with an error naming the file.
+* :func:`check_output_path` - refuse, before any work, an output path that is empty, a
+  directory, a device or other special file, or one of the inputs.
+"""
+from __future__ import annotations
+
+import contextlib
+import datetime
+import json
+import os
+import pathlib
+import secrets
+import stat
+import sys
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on Python 3.10 only
+    import tomli as tomllib
+
+from .exceptions import ContactpipeError, OutputPathError, SceneError
+
+__all__ = ["atomic_path", "write_text", "write_json", "exclusive_lock", "LockedError",
+           "read_toml", "loads_toml", "TOMLDecodeError", "check_output_path", "temp_name",
+           "temporaries", "publish", "utc_now"]
+
+TOMLDecodeError = tomllib.TOMLDecodeError
+#: Suffix of every temporary file of an atomic write (a killed process may leave one).
+TEMP_SUFFIX = ".part"
+
+
+class LockedError(ContactpipeError, BlockingIOError):
+    """Another process holds the lock of a folder or a file."""
+
+
+def utc_now() -> str:
+    """The current UTC time, ISO 8601 to the second."""
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+# ----------------------------------------------------------------------------- writing
+
+def temp_name(target, keep_suffix: bool = False) -> pathlib.Path:
+    """A fresh hidden temporary name beside ``target``: ``.NAME.<pid>-<token>.part``
+    (``.NAME.<pid>-<token>.part.SUFFIX`` with ``keep_suffix``, for writers that infer the
+    format from the suffix). Every such name matches ``.NAME.*.part*``."""
+    target = pathlib.Path(target)
+    tail = target.suffix if keep_suffix else ""
+    return target.with_name(f".{target.name}.{os.getpid()}-{secrets.token_hex(4)}"
+                            f"{TEMP_SUFFIX}{tail}")
+
+
+def temporaries(target) -> list:
+    """Temporary files that interrupted atomic writes of ``target`` left behind."""
+    import glob
+    target = pathlib.Path(target)
+    if not target.parent.is_dir():
+        return []
+    return sorted(target.parent.glob(f".{glob.escape(target.name)}.*{TEMP_SUFFIX}*"))
+
+
+def fsync_file(path) -> None:
+    """Flush a written file's data to the disk."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def fsync_dir(folder) -> None:
+    """Make a rename in ``folder`` durable (not possible on every platform: ignored there)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def publish(tmp, target) -> None:
+    """fsync a finished temporary file and rename it onto ``target`` (atomic)."""
+    tmp, target = pathlib.Path(tmp), pathlib.Path(target)
+    fsync_file(tmp)
+    os.replace(tmp, target)
+    fsync_dir(target.parent)
+
+
+@contextlib.contextmanager
+def atomic_path(target, keep_suffix: bool = False):
+    """Yield a temporary path to write; on success it replaces ``target`` atomically.
+
+    >>> with atomic_path("table.csv") as tmp:
+    ...     frame.to_csv(tmp)
+
+    The folder of ``target`` must exist. On any exception the temporary file is removed
+    and ``target`` is left as it was; when the block wrote nothing, ``OSError``.
+    ``keep_suffix``: the temporary name ends with the target's suffix (see
+    :func:`temp_name`).
+    """
+    target = pathlib.Path(target)
+    tmp = temp_name(target, keep_suffix)
+    try:
+        yield tmp
+        if not tmp.exists():
+            raise FileNotFoundError(f"{target}: nothing was written")
+        publish(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def write_text(target, text: str) -> pathlib.Path:
+    """Write ``text`` (UTF-8) to ``target`` atomically."""
+    with atomic_path(target) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return pathlib.Path(target)
+
+
+def write_json(target, data) -> pathlib.Path:
+    """Write ``data`` as JSON (no NaN, one item per line) to ``target`` atomically."""
+    return write_text(target, json.dumps(data, indent=1, allow_nan=False) + "\n")
+
+
+# ----------------------------------------------------------------------------- locks
+
+def _holder(path: pathlib.Path) -> str:
+    """Who holds the lock, as its holder wrote into the lock file ("" if unknown)."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(200).decode("utf-8", "replace").strip()
+    except OSError:
+        return ""
+
+
+@contextlib.contextmanager
+def exclusive_lock(path, what: str, error=LockedError):
+    """Hold an exclusive, non-blocking lock on ``path`` (created if needed) while inside.
+
+    Parameters
+    ----------
+    path : path-like
+        The lock file. It stays after release; the lock dies with its process.
+    what : str
+        What holds the lock, for the message ("sweep", "pipeline run", "resumable run").
+    error : type
+        Raised when another process (or another lock object) holds it, with a message
+        naming the lock file and its holder.
+    """
+    import filelock
+
+    path = pathlib.Path(path)
+    lock = filelock.FileLock(str(path), blocking=False)
+    try:
+        lock.acquire()
+    except filelock.Timeout:
+        holder = _holder(path)
+        who = f" ({holder})" if holder else ""
+        raise error(f"another {what} holds the lock {path}{who}: wait for it to finish or "
+                    f"use another folder") from None
+    try:
+        with contextlib.suppress(OSError):     # the holder, for a contender's message
+            with open(path, "r+b") as f:
+                f.truncate(0)
+                f.write(f"pid {os.getpid()} since {utc_now()}\n".encode())
+        yield
+    finally:
+        lock.release()
+
+
+# ----------------------------------------------------------------------------- reading
+
+def loads_toml(text: str, source: str = "the text") -> dict:
+    """TOML text as a dict; :class:`SceneError` naming ``source`` if it is not TOML."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(f"{source} is not valid TOML: {err}") from None
+
+
+def read_toml(path, what: str = "") -> dict:
+    """A TOML file as a dict.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    SceneError
+        The file is not UTF-8 TOML; the message names the file and ``what`` it should be
+        ("scene", "sweep", "pipeline").
+    """
+    path = pathlib.Path(path)
+    with open(path, "rb") as f:
+        raw = f.read()
+    kind = f" {what}" if what else ""
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise SceneError(f"{path} is not a valid TOML{kind} file: not UTF-8 text "
+                         f"({err})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(f"{path} is not a valid TOML{kind} file: {err}") from None
+
+
+# ----------------------------------------------------------------------------- checks
+
+def check_output_path(path, what: str = "output", inputs=()) -> pathlib.Path:
+    """Refuse an output path before any work is done; return it as a Path.
+
+    Refused: an empty path; an existing directory; anything that is not a regular file
+    (a device such as ``/dev/null``, a FIFO, a socket); one of ``inputs`` (the file would
+    overwrite what it is computed from); a path whose folder exists as a file.
+
+    Raises
+    ------
+    OutputPathError
+        One line naming the path, the problem and what is allowed.
+    """
+    if path is None or not os.fspath(path):
+        raise OutputPathError(f"{what} path is empty: give a file name such as run.nc")
+    path = pathlib.Path(os.fspath(path)).expanduser()
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        st = None
+    except OSError as err:
+        raise OutputPathError(f"{what} {path}: cannot be checked ({err.strerror})") from None
+    if st is not None:
+        if stat.S_ISDIR(st.st_mode):
+            raise OutputPathError(f"{what} {path} is an existing directory: give a file "
+                                  f"name inside it, e.g. {path / 'run.nc'}")
+        if not stat.S_ISREG(st.st_mode):
+            raise OutputPathError(f"{what} {path} is not a regular file (a device, FIFO or "
+                                  f"socket): contactpipe writes a file atomically and would "
+                                  f"replace it; give a file name")
+        for inp in inputs:
+            if inp is None:
+                continue
+            with contextlib.suppress(OSError):
+                if os.path.samefile(path, inp):
+                    raise OutputPathError(f"{what} {path} is the input file {inp}: writing "
+                                          f"it would destroy the input; give another name")
+    parent = path.parent if str(path.parent) else pathlib.Path(".")
+    if parent.exists() and not parent.is_dir():
+        raise OutputPathError(f"{what} {path}: its folder {parent} is a file, not a "
+                              f"directory")
+    return path
