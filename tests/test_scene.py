@@ -204,11 +204,14 @@ def test_replace_into_the_fretting_preset_and_back():
     t, W, T1, T2 = f2.load.knots()
     assert t[-1] == 2.0 and len(t) == 6
     assert f2.time.steps == 20  # given explicitly in the base scene: kept
-    # a derived default (one step per knot interval) is derived again
+    # a derived default (the least mesh holding every knot: 0, 0.2, 0.6, 1 -> 5 steps)
+    # is derived again
     g = Scene.from_dict({k: v for k, v in fretting_dict().items() if k != "time"})
-    assert g.time.steps == 3
+    assert g.time.steps == 5
     g2 = g.replace({"load.time": [0.0, 1.0], "load.tangential_force": [0.0, 50.0]})
     assert g2.time.steps == 1
+    g3 = g.replace({"load.time": [0.0, 1.0, 2.0, 3.0]})
+    assert g3.time.steps == 3  # equally spaced knots: one step per interval
 
 
 # ----------------------------------------------------------------------------- load program
@@ -417,6 +420,7 @@ def scene_dicts(draw):
     mu = draw(st.sampled_from([0.0, draw(st.floats(0.0, 2.0, **finite))]))
     load = {}
     force = st.floats(1e-3, 1e6, **finite)
+    commensurate = True  # the knots lie on a uniform mesh (a fretting preset's do)
     if mu > 0 and draw(st.booleans()):
         W = draw(force)
         load["normal_force"] = W
@@ -428,7 +432,14 @@ def scene_dicts(draw):
     else:
         n = draw(st.integers(1, 6))
         t0 = draw(st.floats(-10, 10, **finite))
-        dts = draw(st.lists(st.floats(1e-3, 10, **finite), min_size=n - 1, max_size=n - 1))
+        commensurate = draw(st.booleans())
+        if not commensurate:  # any knots: time.steps is then given (below)
+            dts = draw(st.lists(st.floats(1e-3, 10, **finite), min_size=n - 1,
+                                max_size=n - 1))
+        else:  # commensurate knots: the default mesh holds them all
+            unit = draw(st.floats(1e-3, 10, **finite))
+            dts = [k * unit for k in draw(st.lists(st.integers(1, 12), min_size=n - 1,
+                                                   max_size=n - 1))]
         load["time"] = [t0] + [float(x) for x in t0 + np.cumsum(dts)]
         if draw(st.booleans()):
             W = [draw(force) for _ in range(n)]
@@ -446,6 +457,11 @@ def scene_dicts(draw):
                                             for f, w, a in zip(frac, W, ang)]
     if draw(st.booleans()):
         load["preload"] = draw(st.sampled_from(["frictional", "frictionless"]))
+    window = (load["fretting"]["window"] if "fretting" in load
+              else load["time"][-1] - load["time"][0])
+    for body in (indenter, halfspace):  # a creep table must reach the end of the window
+        if body.get("creep") == "tabulated" and body["table"][-1][0] < window:
+            body["table"].append([window, body["table"][-1][1]])
     no_instant = _phi0_zero(indenter) or _phi0_zero(halfspace)
     grid = {"points": [draw(st.integers(8, 64)), draw(st.integers(8, 64))]}
     grid["size"] = ("auto" if not no_instant and draw(st.booleans())
@@ -456,7 +472,7 @@ def scene_dicts(draw):
         d["name"] = draw(st.text(min_size=1, max_size=12))
     if mu > 0 or draw(st.booleans()):
         d["friction"] = {"mu": mu}
-    if n > 1 and draw(st.booleans()):
+    if n > 1 and (not commensurate or draw(st.booleans())):
         d["time"] = {"steps": draw(st.integers(1, 500))}
     if draw(st.booleans()):
         d["solver"] = {
@@ -488,6 +504,10 @@ def test_random_valid_scenes_round_trip(d):
     assert Scene.from_dict(copy.deepcopy(out)).digest() == s.digest()
     t, W, T1, T2 = s.instants()
     assert len(t) == s.time.steps + 1 and np.all(np.isfinite(W))
+    if "time" not in d:  # the default mesh holds every knot
+        knots = s.load.knots()[0]
+        span = max(knots[-1] - knots[0], 1e-300)
+        assert all(np.min(np.abs(t - tk)) <= 1e-9 * span + 1e-12 * abs(tk) for tk in knots)
     if s.grid.size == "auto":
         assert all(L > 0 and math.isfinite(L) for L in s.resolved_grid_size())
 
