@@ -58,7 +58,7 @@ AUTO_PUNCH_FACTOR = 2.5
 
 #: The top level of a scene file: its name and its tables, in file order.
 FIELDS = (
-    Field("name", "string", "a non-empty string", default="scene"),
+    Field("name", "string", "a non-empty string", ok=bool, default="scene"),
     Field("geometry", "table", "shape = " + " | ".join(SHAPES), part=Geometry,
           required=True),
     Field("indenter", "table", "material = " + " | ".join(MATERIALS), part=BodySpec,

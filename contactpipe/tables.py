@@ -37,7 +37,7 @@ __all__ = ["Field", "Reader", "show", "is_number", "is_integer", "is_sequence", 
 
 #: The kinds a field may have; a tuple of kinds is chosen by the shape of the value.
 KINDS = ("number", "integer", "choice", "bool", "string", "path", "numbers", "integers",
-         "pairs", "table")
+         "strings", "pairs", "table")
 
 MISSING = object()
 
@@ -205,7 +205,7 @@ def _shape_of(v) -> str:
     return "rows" if items and is_sequence(items[0]) else "list"
 
 
-_SHAPES = {"numbers": "list", "integers": "list", "pairs": "rows"}
+_SHAPES = {"numbers": "list", "integers": "list", "strings": "list", "pairs": "rows"}
 
 
 def _pick(kinds: tuple, v) -> str:
@@ -243,7 +243,16 @@ def _bool(f, v):
 
 
 def _string(f, v):
-    return v if isinstance(v, str) and v and _ok(f, v) else MISSING
+    return v if isinstance(v, str) and _ok(f, v) else MISSING
+
+
+def _strings(f, v):
+    if not is_sequence(v) or isinstance(v, np.ndarray):
+        return MISSING
+    items = as_list(v)
+    if not all(isinstance(x, str) and _ok(f, x) for x in items):
+        return MISSING
+    return tuple(items) if _length_ok(f, items) else MISSING
 
 
 def _path(f, v):
@@ -290,8 +299,8 @@ def _pairs(f, v):
 
 
 _READERS = {"number": _number, "integer": _integer, "choice": _choice, "bool": _bool,
-            "string": _string, "path": _path, "numbers": _numbers, "integers": _integers,
-            "pairs": _pairs}
+            "string": _string, "strings": _strings, "path": _path, "numbers": _numbers,
+            "integers": _integers, "pairs": _pairs}
 #: Kinds whose "got" points out a string or a boolean given in place of a number.
 _TYPED = {"number", "integer", "numbers", "integers", "pairs"}
 
