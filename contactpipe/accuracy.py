@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .exceptions import SceneError
-from .scene_parts import knot_steps
+from .scene_parts import MAX_POINTS, MAX_STEPS, MIN_POINTS, knot_steps
 
 __all__ = ["PRESETS", "Preset", "resolve_accuracy", "knot_multiple"]
 
@@ -101,21 +101,30 @@ def resolve_accuracy(scene):
     # the largest contact's semi-axes (a flat punch: its radius) and the grid's sides
     a_max = scene.hertz_semi_axes()
     side = scene.resolved_grid_size()
+    if not all(math.isfinite(x) and x > 0 for x in tuple(a_max) + tuple(side)):
+        raise SceneError(f"solver.accuracy = {name!r}: the Hertz estimate of the largest "
+                         f"contact gives semi-axes {tuple(a_max)} m on sides {tuple(side)} "
+                         f"m, not finite and > 0; give grid.points and time.steps instead")
     points = []
     for L, a in zip(side, a_max):
-        n = int(math.ceil(pre.cells_across_contact * L / (2.0 * a)))
+        cells = pre.cells_across_contact * (L / a) / 2.0          # inf when a << L
+        n = MAX_POINTS if cells >= MAX_POINTS else int(math.ceil(cells))
         n += n % 2
-        points.append(min(max(n, 8), 4096))
+        points.append(min(max(n, MIN_POINTS), MAX_POINTS))
     knots = len(scene.load.knots()[0]) - 1
-    steps = knots
+    want = float(knots)
     cycles = _tangential_cycles(scene)
     if cycles > 0:
-        steps = max(steps, int(math.ceil(pre.steps_per_cycle * cycles)))
+        want = max(want, pre.steps_per_cycle * cycles)
     times = _characteristic_times(scene)
     if times and knots > 0:
-        steps = max(steps, int(math.ceil(pre.steps_per_relaxation * scene.load.window
-                                         / min(times))))
-    steps = _on_knots(scene, steps)
+        want = max(want, pre.steps_per_relaxation * scene.load.window / min(times))
+    if want > MAX_STEPS:
+        raise SceneError(f"solver.accuracy = {name!r} asks for {want:.3g} time steps "
+                         f"({pre.steps_per_cycle} per load cycle, "
+                         f"{pre.steps_per_relaxation} per relaxation time), above the cap "
+                         f"of {MAX_STEPS}; give time.steps, or a shorter load window")
+    steps = _on_knots(scene, int(math.ceil(want)))
     changes = {"grid.points": points}
     if knots > 0:
         changes["time.steps"] = steps

@@ -95,7 +95,9 @@ def _creep_factor(spec, window: float, moduli: str) -> float:
     creep = spec.creep_function()
     with np.errstate(all="ignore"):
         if moduli == "window":
-            return float(creep.max_over(window))
+            phi = float(creep.max_over(window))
+            # NaN only from inf * 0 of a vanishing time constant: an unbounded creep
+            return math.inf if math.isnan(phi) else phi
         phi0 = float(creep.phi0)
     return phi0 if phi0 > 0 else 1.0
 

@@ -375,22 +375,31 @@ def knot_steps(t, limit: int = MAX_STEPS):
     rounding of its float). Returns 0 for a single knot, 1 for two, and None when no
     such mesh has at most ``limit`` steps (positions incommensurate, or too fine).
     """
-    t = [float(x) for x in t]
-    if len(t) < 2:
+    t = np.asarray(t, dtype=float)
+    if t.size < 2:
         return 0
-    span = t[-1] - t[0]
+    span = float(t[-1] - t[0])
     if not (math.isfinite(span) and span > 0):
         return None
-    rounding = 8 * np.finfo(float).eps * max(abs(t[0]), abs(t[-1])) / span
+    rounding = 8 * np.finfo(float).eps * max(abs(float(t[0])), abs(float(t[-1]))) / span
+    f = (t[1:-1] - t[0]) / span
+    held = np.zeros(f.size, dtype=bool)
     m = 1
-    for tk in t[1:-1]:
-        q = _least_denominator((tk - t[0]) / span, rounding, limit)
+    while True:
+        # every knot at once on the mesh of m steps; the first one off sets a finer mesh
+        pos = f * m
+        off = np.flatnonzero(~held & (np.abs(pos - np.rint(pos)) > 1e-9 + m * rounding))
+        if off.size == 0:
+            return m
+        q = _least_denominator(float(f[off[0]]), rounding, limit)
         if q is None:
             return None
+        if m % q == 0:          # held to 1e-9 of its own step, which m subdivides
+            held[off[0]] = True
+            continue
         m = m * q // math.gcd(m, q)
         if m > limit:
             return None
-    return m
 
 
 def _least_denominator(f: float, rounding: float, limit: int):
