@@ -18,8 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .exceptions import SceneError
+from .scene_parts import MAX_POINTS, MAX_STEPS, MIN_POINTS, knot_steps
 
-__all__ = ["PRESETS", "Preset", "resolve_accuracy"]
+__all__ = ["PRESETS", "Preset", "resolve_accuracy", "knot_multiple"]
+
+#: The largest step count :func:`knot_multiple` looks for.
+MAX_KNOT_MULTIPLE = 100_000
 
 
 @dataclass(frozen=True)
@@ -70,18 +74,9 @@ def _characteristic_times(scene):
 
 def knot_multiple(scene) -> int:
     """The least step count whose uniform mesh holds every knot of the load program
-    (knot fractions of the window rounded to 1e-9; 0 when none exists below 100 000)."""
-    from fractions import Fraction
-    t = np.asarray(scene.load.knots()[0], dtype=float)
-    if t.size < 2:
-        return 1
-    m = 1
-    for tk in t[1:-1]:
-        frac = Fraction((tk - t[0]) / (t[-1] - t[0])).limit_denominator(100_000)
-        if abs(float(frac) - (tk - t[0]) / (t[-1] - t[0])) > 1e-9:
-            return 0
-        m = m * frac.denominator // math.gcd(m, frac.denominator)
-    return m if m <= 100_000 else 0
+    (:func:`contactpipe.scene_parts.knot_steps`; 0 when none exists below 100 000)."""
+    m = knot_steps(scene.load.knots()[0], MAX_KNOT_MULTIPLE)
+    return 1 if m == 0 else (m or 0)
 
 
 def _on_knots(scene, steps):
@@ -103,27 +98,33 @@ def resolve_accuracy(scene):
     if scene.geometry.shape == "surface":
         raise SceneError("solver.accuracy with geometry.shape = 'surface': the contact size "
                          "cannot be estimated; give grid.points and time.steps instead")
-    from .scene import _hertz_size
-    auto_side = _hertz_size(scene.geometry, scene.indenter, scene.halfspace, scene.load)
-    # _hertz_size gives 3 a_max for sphere/ellipsoid, 2.5 R for a flat punch
-    factor = 2.5 if scene.geometry.shape == "flat_punch" else 3.0
-    a_max = [s / factor for s in auto_side]
-    side = auto_side if scene.grid.size == "auto" else scene.grid.size
+    # the largest contact's semi-axes (a flat punch: its radius) and the grid's sides
+    a_max = scene.hertz_semi_axes()
+    side = scene.resolved_grid_size()
+    if not all(math.isfinite(x) and x > 0 for x in tuple(a_max) + tuple(side)):
+        raise SceneError(f"solver.accuracy = {name!r}: the Hertz estimate of the largest "
+                         f"contact gives semi-axes {tuple(a_max)} m on sides {tuple(side)} "
+                         f"m, not finite and > 0; give grid.points and time.steps instead")
     points = []
     for L, a in zip(side, a_max):
-        n = int(math.ceil(pre.cells_across_contact * L / (2.0 * a)))
+        cells = pre.cells_across_contact * (L / a) / 2.0          # inf when a << L
+        n = MAX_POINTS if cells >= MAX_POINTS else int(math.ceil(cells))
         n += n % 2
-        points.append(min(max(n, 8), 4096))
+        points.append(min(max(n, MIN_POINTS), MAX_POINTS))
     knots = len(scene.load.knots()[0]) - 1
-    steps = knots
+    want = float(knots)
     cycles = _tangential_cycles(scene)
     if cycles > 0:
-        steps = max(steps, int(math.ceil(pre.steps_per_cycle * cycles)))
+        want = max(want, pre.steps_per_cycle * cycles)
     times = _characteristic_times(scene)
     if times and knots > 0:
-        steps = max(steps, int(math.ceil(pre.steps_per_relaxation * scene.load.window
-                                         / min(times))))
-    steps = _on_knots(scene, steps)
+        want = max(want, pre.steps_per_relaxation * scene.load.window / min(times))
+    if want > MAX_STEPS:
+        raise SceneError(f"solver.accuracy = {name!r} asks for {want:.3g} time steps "
+                         f"({pre.steps_per_cycle} per load cycle, "
+                         f"{pre.steps_per_relaxation} per relaxation time), above the cap "
+                         f"of {MAX_STEPS}; give time.steps, or a shorter load window")
+    steps = _on_knots(scene, int(math.ceil(want)))
     changes = {"grid.points": points}
     if knots > 0:
         changes["time.steps"] = steps

@@ -187,12 +187,20 @@ def exclusive_lock(path, what: str, error=LockedError):
 
 # ----------------------------------------------------------------------------- reading
 
+#: Why a TOML text nested deeper than the parser's recursion can go is refused.
+_TOO_DEEP = ("arrays or tables nested too deep to read (hundreds of levels); a scene, "
+             "sweep or pipeline file needs a few")
+
+
 def loads_toml(text: str, source: str = "the text") -> dict:
-    """TOML text as a dict; :class:`SceneError` naming ``source`` if it is not TOML."""
+    """TOML text as a dict; :class:`SceneError` naming ``source`` if it is not TOML
+    (a value nested too deep for the parser included: one line, not a RecursionError)."""
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(f"{source} is not valid TOML: {err}") from None
+    except RecursionError:
+        raise SceneError(f"{source} is not valid TOML: {_TOO_DEEP}") from None
 
 
 def read_toml(path, what: str = "") -> dict:
@@ -203,8 +211,8 @@ def read_toml(path, what: str = "") -> dict:
     FileNotFoundError
         No such file.
     SceneError
-        The file is not UTF-8 TOML; the message names the file and ``what`` it should be
-        ("scene", "sweep", "pipeline").
+        The file is not UTF-8 TOML (or nests values too deep to parse); the message
+        names the file and ``what`` it should be ("scene", "sweep", "pipeline").
     """
     path = pathlib.Path(path)
     with open(path, "rb") as f:
@@ -219,6 +227,8 @@ def read_toml(path, what: str = "") -> dict:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(f"{path} is not a valid TOML{kind} file: {err}") from None
+    except RecursionError:
+        raise SceneError(f"{path} is not a valid TOML{kind} file: {_TOO_DEEP}") from None
 
 
 # ----------------------------------------------------------------------------- checks

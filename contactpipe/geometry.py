@@ -15,6 +15,7 @@ Units: metres throughout.
 """
 from __future__ import annotations
 
+import functools
 import os
 
 import numpy as np
@@ -112,11 +113,29 @@ def _is_npy(path: str) -> bool:
     return path.lower().endswith(".npy")
 
 
+def _is_real(dtype) -> bool:
+    """Integers or floats: not complex, boolean, object, text or structured."""
+    return np.dtype(dtype).kind in "iuf"
+
+
+@functools.lru_cache(maxsize=16)
+def _nonfinite(path: str, mtime_ns: int, size: int) -> int:
+    """How many values of a real .npy array are NaN or inf, read in blocks of rows
+    (memory-mapped); cached by the file's modification time and size."""
+    arr = np.load(path, mmap_mode="r", allow_pickle=False)
+    if arr.dtype.kind != "f":
+        return 0
+    rows = max(1, (1 << 22) // max(1, arr.shape[1]))
+    return sum(int(np.count_nonzero(~np.isfinite(arr[i:i + rows])))
+               for i in range(0, arr.shape[0], rows))
+
+
 def check_surface(file, x1=None, x2=None) -> list:
     """Problems with a surface file, and with the grid when ``x1``, ``x2`` are given.
 
-    Reads headers and coordinates only (never the whole array), so it is cheap enough
-    to run on every scene validation.
+    Reads headers and coordinates, and scans a .npy array for NaN and inf once per
+    version of the file (memory-mapped, in blocks; the count is cached by modification
+    time and size), so it is cheap enough to run on every scene validation.
 
     Parameters
     ----------
@@ -130,7 +149,10 @@ def check_surface(file, x1=None, x2=None) -> list:
     -------
     list of str
         One message per problem, each naming ``geometry.file`` and the file; empty
-        when the file can serve the grid.
+        when the file can serve the grid. Refused: a missing or unreadable file, a gap
+        that is not real numbers (complex, boolean, object, text), a .npy array that is
+        not 2-D or holds NaN or inf, a netCDF gap without coordinates or not over
+        x1, x2.
     """
     path = os.fspath(file)
     where = f"geometry.file {path!r}"
@@ -142,9 +164,15 @@ def check_surface(file, x1=None, x2=None) -> list:
             arr = np.load(path, mmap_mode="r", allow_pickle=False)
         except Exception as exc:  # noqa: BLE001 - any failure to read is the user's file
             return [f"{where}: not a readable .npy array ({exc})"]
-        if arr.ndim != 2 or not np.issubdtype(arr.dtype, np.number):
-            return [f"{where}: must hold a 2-D numeric array of shape (N1, N2), "
-                    f"got shape {arr.shape} of {arr.dtype}"]
+        if arr.ndim != 2 or not _is_real(arr.dtype):
+            return [f"{where}: must hold a 2-D array of real numbers [m] of shape (N1, N2), "
+                    f"got shape {arr.shape} of {arr.dtype}"
+                    + (" (a complex gap has no meaning)"
+                       if np.issubdtype(arr.dtype, np.complexfloating) else "")]
+        bad = _nonfinite(path, os.stat(path).st_mtime_ns, os.stat(path).st_size)
+        if bad:
+            return [f"{where}: the gap holds NaN or inf at {bad} of {arr.size} points; "
+                    f"every value must be finite [m]"]
         if grid and arr.shape != (len(x1), len(x2)):
             return [f"{where}: array of shape {arr.shape}, but grid.points is "
                     f"[{len(x1)}, {len(x2)}]; a .npy gap must be given on the scene's grid "
@@ -163,6 +191,9 @@ def check_surface(file, x1=None, x2=None) -> list:
             return [f"{where}: no variable 'gap' (found: {found}); the gap [m] must be a "
                     f"variable 'gap' over dimensions x1, x2"]
         gap = ds["gap"]
+        if not _is_real(gap.dtype):
+            return [f"{where}: variable 'gap' holds {gap.dtype} values; the gap must be real "
+                    f"numbers [m]"]
         if set(gap.dims) != {"x1", "x2"}:
             return [f"{where}: variable 'gap' has dimensions {tuple(gap.dims)}, "
                     f"expected ('x1', 'x2')"]

@@ -91,7 +91,9 @@ class TabulatedCreep:
     t : tuple of float
         Ascending times [s], starting at 0.
     phi : tuple of float
-        phi at those times [1]; held constant past the last time.
+        phi at those times [1]; held constant past the last time. A table is only
+        known up to its last time (:attr:`last_time`): a scene refuses a load window
+        longer than it.
     """
 
     t: tuple
@@ -104,6 +106,11 @@ class TabulatedCreep:
     @property
     def phi0(self) -> float:
         return float(self.phi[0])
+
+    @property
+    def last_time(self) -> float:
+        """The table's last time [s]: phi is known on [0, last_time]."""
+        return float(self.t[-1])
 
     @property
     def is_elastic(self) -> bool:

@@ -42,3 +42,33 @@ def test_surface_refuses_preset(tmp_path):
         {"geometry": {"shape": "surface", "file": str(gap)}, "solver.accuracy": "fast"})
     with pytest.raises(cp.SceneError, match="accuracy"):
         resolve_accuracy(sc)
+
+
+def test_preset_reads_the_public_hertz_estimate():
+    """The preset counts cells across 2 a_max, a_max = Scene.hertz_semi_axes() (the one
+    Hertz size estimate of the package)."""
+    sc = fretting_scene(n=16, steps=4).replace({"solver.accuracy": "fast"})
+    resolved, _ = resolve_accuracy(sc)
+    (a1, _a2), (L1, _L2) = sc.hertz_semi_axes(), sc.grid.size
+    n = int(np.ceil(PRESETS["fast"].cells_across_contact * L1 / (2 * a1)))
+    assert resolved.grid.points[0] == n + n % 2
+
+
+@pytest.mark.parametrize("changes, match", [
+    # 5 steps per relaxation time over 1e9 relaxation times: beyond the step cap
+    ({"halfspace": {"material": "viscoelastic", "young": 210e9, "poisson": 0.3,
+                    "creep": "maxwell", "relaxation_time": 1e-9}},
+     r"solver\.accuracy = 'fast' asks for 5e\+09 time steps .* above the cap of 1000000"),
+    # a Kelvin-Voigt body that does not creep within the window (phi_max = 1 - exp(-1e-300)
+    # = 0 in floats) against a rigid one: no contact size to count cells across
+    ({"indenter": {"material": "rigid"},
+      "halfspace": {"material": "viscoelastic", "young": 210e9, "poisson": 0.3,
+                    "creep": "kelvin_voigt", "retardation_time": 1e300}},
+     r"solver\.accuracy = 'fast': the Hertz estimate of the largest contact gives "
+     r"semi-axes \(0\.0, 0\.0\) m"),
+])
+def test_preset_refuses_what_it_cannot_resolve(changes, match):
+    """One SceneError, not a ZeroDivisionError or an OverflowError."""
+    sc = fretting_scene(n=16, steps=4).replace({"solver.accuracy": "fast", **changes})
+    with pytest.raises(cp.SceneError, match=match):
+        resolve_accuracy(sc)

@@ -260,6 +260,29 @@ MISTAKES = [
      r"solver\.time_rule = 'step_start' with halfspace\.creep = 'kelvin_voigt' \(phi\(0\) = "
      r"0, no instantaneous elasticity\): the step-start rule gives a rigid response\. Use "
      r"time_rule = \"linear\""),
+    ("creep table shorter than the window", {"halfspace": {**VE, "creep": "tabulated",
+                                                          "table": [[0, 1.0], [0.5, 2.0]]}},
+     r"^halfspace\.table ends at t = 0\.5 s, before the end of the load window \(load\.time "
+     r"spans 1 s\): phi\(t\) is not known past the table's last row; extend the table to "
+     r"t >= 1 s$"),
+    # absurd sizes: capped, the cap said
+    ("time steps absurd", {"time.steps": 10**9},
+     r"^time\.steps = 1000000000 is above the cap of 1000000: each step is a full contact "
+     r"solve"),
+    ("preload substeps absurd", {"solver.preload_substeps": 10**9},
+     r"^solver\.preload_substeps = 1000000000 is above the cap of 10000"),
+    ("fretting cycles absurd", {**FRETTING, "load.fretting": {"amplitude": 9.0, "window": 1.0,
+                                                              "cycles": 10**9}},
+     r"load\.fretting\.cycles must be an integer from 1 to 100000, got 1000000000"),
+    ("threads absurd", {"solver.threads": 10**6},
+     r"^solver\.threads = 1000000 is above the cap of 1024"),
+    ("stride absurd", {"output.stride": 10**12},
+     r"^output\.stride = 1000000000000 is above the cap of 1000000"),
+    ("time of an infinite span", {"load.time": [-1e308, 0.0, 1e308, 1.7e308]},
+     r"load\.time spans -1e\+308 to 1\.7e\+308 s, a duration beyond the range of a float"),
+    ("knots on no uniform mesh", {"time": DELETE, "load.time": [0.0, 1 / np.pi, 0.6, 1.0]},
+     r"^time\.steps is required here: no uniform mesh of at most 1000000 steps holds every "
+     r"load knot \(load\.time = \[0\.0, 0\.3183"),
     ("step_start with a table from phi = 0", {
         "solver.time_rule": "step_start", "halfspace": {"material": "rigid"},
         "indenter": {**VE, "creep": "tabulated", "table": [[0, 0.0], [1.0, 1.0]]}},
@@ -360,3 +383,116 @@ def test_invalid_toml_names_the_file(tmp_path):
     p.write_text("[geometry\nshape = 'sphere'\n")
     with pytest.raises(SceneError, match=r"broken\.toml is not valid TOML"):
         Scene.from_toml(p)
+
+
+# ----------------------------------------------------------------------------- small traps
+
+def deep(n, leaf="x"):
+    """A value nested ``n`` lists deep."""
+    for _ in range(n):
+        leaf = [leaf]
+    return leaf
+
+
+@pytest.mark.parametrize("path", ["name", "geometry.radius", "load.time", "grid.points",
+                                  "halfspace.table", "friction", "load.tangential_force"])
+def test_a_value_nested_5000_deep_is_one_line(path):
+    with pytest.raises(SceneError) as info:
+        scene_with({path: deep(5000)})
+    msg = str(info.value)
+    assert "\n" not in msg and len(msg) < 600 and path in msg
+
+
+def test_toml_nested_5000_deep_is_one_line(tmp_path):
+    text = "name = " + "[" * 5000 + "]" * 5000 + "\n"
+    with pytest.raises(SceneError, match=r"^the scene is not valid TOML: arrays or tables "
+                                         r"nested too deep to read"):
+        Scene.from_toml_text(text)
+    p = tmp_path / "deep.toml"
+    p.write_text(text)
+    with pytest.raises(SceneError, match=r"deep\.toml is not valid TOML: arrays or tables"):
+        Scene.from_toml(p)
+    from contactpipe.files import read_toml
+    with pytest.raises(SceneError, match=r"deep\.toml is not a valid TOML sweep file: arrays"):
+        read_toml(p, "sweep")
+
+
+TINY = """name = "t"
+[geometry]
+shape = "sphere"
+radius = 0.018
+[indenter]
+material = "rigid"
+[halfspace]
+material = "elastic"
+young = 105e9
+poisson = 0.3
+[friction]
+mu = 0.1
+[load]
+normal_force = 1000.0
+{load}
+[grid]
+points = [24, 24]
+size = [2.0e-3, 2.0e-3]
+{extra}
+"""
+EXPLICIT = "time = [0.0, 0.2, 0.6, 1.0]\ntangential_force = [0.0, 90.0, -90.0, 90.0]"
+PRESET = "fretting = {amplitude = 90.0, window = 1.0}"
+
+#: (id, the [load] lines, more tables, a file the scene refers to or None, message)
+BAD_FILES = [
+    ("steps 1e9", EXPLICIT, "[time]\nsteps = 1000000000", None,
+     "time.steps = 1000000000 is above the cap of 1000000"),
+    ("preload substeps 1e9", EXPLICIT, "[solver]\npreload_substeps = 1000000000", None,
+     "solver.preload_substeps = 1000000000 is above the cap of 10000"),
+    ("fretting cycles 1e9", "fretting = {amplitude = 90.0, window = 1.0, cycles = 1000000000}",
+     "", None, "load.fretting.cycles must be an integer from 1 to 100000"),
+    ("knots on no mesh", "time = [0.0, 0.3183098861837907, 1.0]\n"
+                         "tangential_force = [0.0, 90.0, 0.0]", "", None,
+     "time.steps is required here"),
+    ("complex gap", PRESET, "", np.zeros((24, 24), complex), "(a complex gap has no meaning)"),
+    ("gap with NaN", PRESET, "", np.full((24, 24), np.nan), "the gap holds NaN or inf"),
+    ("creep table too short", PRESET, "", None, "halfspace.table ends at t = 0.5 s"),
+    ("name nested 5000 deep", PRESET, "", None, "is not valid TOML: arrays or tables nested"),
+]
+
+
+@pytest.mark.parametrize("load, extra, gap, message", [b[1:] for b in BAD_FILES],
+                         ids=[b[0] for b in BAD_FILES])
+def test_bad_scene_file_is_one_line_exit_2_and_no_file(tmp_path, capsys, load, extra, gap,
+                                                       message):
+    from contactpipe.pipeline import cli
+    text = TINY.format(load=load, extra=extra)
+    if gap is not None:
+        np.save(tmp_path / "gap.npy", gap)
+        text = text.replace('shape = "sphere"\nradius = 0.018', 'shape = "surface"\n'
+                                                                'file = "gap.npy"')
+    if message.startswith("halfspace.table"):
+        text = text.replace('material = "elastic"', 'material = "viscoelastic"\n'
+                            'creep = "tabulated"\ntable = [[0.0, 1.0], [0.5, 2.0]]')
+    if "nested" in message:
+        text = text.replace('name = "t"', "name = " + "[" * 5000 + "]" * 5000)
+    scene = tmp_path / "bad.toml"
+    scene.write_text(text)
+    before = sorted(tmp_path.iterdir())
+    out = tmp_path / "x.nc"
+    assert cli.main(["run", str(scene), "-o", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("contactpipe: error: "), err[:2000]
+    assert message in err
+    assert sorted(tmp_path.iterdir()) == before and not out.exists()
+
+
+def test_deep_name_through_the_console_is_one_line(tmp_path):
+    """The issue's case in a fresh process: a 3002-line RecursionError before."""
+    import subprocess
+    import sys
+    scene = tmp_path / "bad.toml"
+    scene.write_text(TINY.format(load=PRESET, extra="").replace(
+        'name = "t"', "name = " + "[" * 5000 + "]" * 5000))
+    r = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run", str(scene),
+                        "-o", str(tmp_path / "x.nc")], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr[-2000:]
+    assert "nested too deep" in r.stderr and not (tmp_path / "x.nc").exists()

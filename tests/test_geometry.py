@@ -146,3 +146,37 @@ def test_surface_missing_or_unreadable(tmp_path):
     junk.write_text("not netcdf")
     with pytest.raises(SceneError, match=r"not a readable netCDF file"):
         g.surface_gap(X1, X2, junk)
+
+
+@pytest.mark.parametrize("arr, match", [
+    (np.full((16, 12), 1e-6 + 1e-7j), r"2-D array of real numbers .*complex128 \(a complex "
+                                      r"gap has no meaning\)"),
+    (np.zeros((16, 12), dtype=bool), r"real numbers .*got shape \(16, 12\) of bool"),
+    (np.zeros((16, 12, 2)), r"real numbers .*got shape \(16, 12, 2\)"),
+    (np.zeros(192), r"real numbers .*got shape \(192,\)"),
+    (np.full((16, 12), np.inf), r"the gap holds NaN or inf at 192 of 192 points"),
+    (np.array([[None] * 12] * 16, dtype=object), r"not a readable \.npy array"),
+    (np.zeros((16, 12), dtype=[("a", float), ("b", float)]), r"real numbers"),
+])
+def test_surface_npy_must_be_a_real_finite_array(tmp_path, arr, match):
+    """Refused at validation, naming geometry.file (a complex gap used to lose its
+    imaginary part silently)."""
+    f = tmp_path / "gap.npy"
+    np.save(f, arr, allow_pickle=True)
+    for check in (lambda: Geometry("surface", file=str(f)), lambda: g.surface_gap(X1, X2, f)):
+        with pytest.raises(SceneError, match=r"^geometry\.file '.*gap\.npy': .*" + match):
+            check()
+
+
+def test_surface_netcdf_gap_must_be_real_numbers(tmp_path):
+    x = np.linspace(-2e-3, 2e-3, 5)
+    f = write_nc(tmp_path / "b.nc", x, x, np.zeros((5, 5), dtype=bool))
+    with pytest.raises(SceneError, match=r"variable 'gap' holds bool values; the gap must be "
+                                         r"real numbers \[m\]"):
+        Geometry("surface", file=str(f))
+
+
+def test_surface_npy_integers_are_metres(tmp_path):
+    f = tmp_path / "gap.npy"
+    np.save(f, np.arange(192, dtype=np.int32).reshape(16, 12))
+    assert Geometry("surface", file=str(f)).gap(X1, X2).dtype == float

@@ -10,7 +10,8 @@ import textwrap
 import pytest
 
 from contactpipe.pipeline import cli
-from contactpipe.pipeline.run import PipelineLockedError, read_pipeline_file, run_pipeline
+from contactpipe.pipeline.config import read_pipeline_file
+from contactpipe.pipeline.run import PipelineLockedError, run_pipeline
 from contactpipe.testing import TINY_SCENES
 
 CREEP = TINY_SCENES["creep"]

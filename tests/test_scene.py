@@ -16,6 +16,7 @@ from contactpipe import materials
 from contactpipe.exceptions import SceneError
 from contactpipe.scene import (BodySpec, Fretting, Friction, Geometry, Grid, Load, Output,
                                Scene, Solver, TimeMesh)
+from contactpipe.scene_parts import knot_steps
 
 from contactpipe.testing import TINY_SCENES
 
@@ -204,11 +205,14 @@ def test_replace_into_the_fretting_preset_and_back():
     t, W, T1, T2 = f2.load.knots()
     assert t[-1] == 2.0 and len(t) == 6
     assert f2.time.steps == 20  # given explicitly in the base scene: kept
-    # a derived default (one step per knot interval) is derived again
+    # a derived default (the least mesh holding every knot: 0, 0.2, 0.6, 1 -> 5 steps)
+    # is derived again
     g = Scene.from_dict({k: v for k, v in fretting_dict().items() if k != "time"})
-    assert g.time.steps == 3
+    assert g.time.steps == 5
     g2 = g.replace({"load.time": [0.0, 1.0], "load.tangential_force": [0.0, 50.0]})
     assert g2.time.steps == 1
+    g3 = g.replace({"load.time": [0.0, 1.0, 2.0, 3.0]})
+    assert g3.time.steps == 3  # equally spaced knots: one step per interval
 
 
 # ----------------------------------------------------------------------------- load program
@@ -294,6 +298,139 @@ def test_single_knot_load_has_one_instant():
     with pytest.raises(SceneError, match=r"time\.steps = 5 needs a load program with a "
                                          r"duration"):
         Scene.from_dict(d)
+
+
+def _preset(cycles=1, window=1.0, amplitude=90.0):
+    d = fretting_dict()
+    del d["time"], d["load"]["time"], d["load"]["tangential_force"]
+    d["load"]["fretting"] = {"amplitude": amplitude, "window": window, "cycles": cycles}
+    return Scene.from_dict(d)
+
+
+def test_fretting_preset_without_time_holds_every_knot():
+    """The default mesh is the least that holds every knot: 0, 1/5, 3/5, 1 of the window
+    -> 5 steps, so T1 runs 0, 90, -90, 90 N at the knots (3 steps cut the loop to
+    0, 30, -60, 90 N)."""
+    s = _preset()
+    assert s.time.steps == 5 and s.to_dict()["time"] == {"steps": 5}
+    t, W, T1, T2 = s.instants()
+    np.testing.assert_allclose(t, [0.0, 0.2, 0.4, 0.6, 0.8, 1.0], atol=1e-15)
+    np.testing.assert_allclose(T1, [0.0, 90.0, 0.0, -90.0, 0.0, 90.0], atol=1e-12)
+    two = _preset(cycles=2, window=9.0, amplitude=10.0)
+    assert two.time.steps == 9  # 1 + 4 n
+    t, _, T1, _ = two.instants()
+    np.testing.assert_allclose(T1[[0, 1, 3, 5, 7, 9]], [0, 10, -10, 10, -10, 10], atol=1e-12)
+    assert _preset(cycles=100_000).time.steps == 400_001
+    assert Scene.from_toml_text(s.to_toml()) == s
+
+
+def test_the_archive_of_a_preset_reaches_every_knot():
+    """End to end: the default mesh of the preset puts the turning points in the archive
+    (24 x 24 grid, 5 steps; T1 reached to 1e-9 of T*)."""
+    import contactpipe as cp
+    ds = cp.simulate(_preset())
+    np.testing.assert_allclose(ds["time"].values, [0.0, 0.2, 0.4, 0.6, 0.8, 1.0], atol=1e-15)
+    np.testing.assert_allclose(ds["T1"].values, [0.0, 90.0, 0.0, -90.0, 0.0, 90.0],
+                               atol=90.0 * 1e-9)
+
+
+def test_knot_steps():
+    assert knot_steps([0.0]) == 0 and knot_steps([2.0, 3.0]) == 1
+    assert knot_steps([0.0, 0.2, 0.6, 1.0]) == 5
+    assert knot_steps([0.0, 1 / 3, 1.0]) == 3 and knot_steps([1.0, 1.25, 1.5, 2.0]) == 4
+    assert knot_steps([0.0, 0.1, 0.35, 1.7]) == 34       # 1/17, 7/34
+    assert knot_steps([0.0, 1 / math.pi, 1.0]) is None   # on no mesh of <= 1e6 steps
+    assert knot_steps([0.0, 0.5, 1.0], limit=1) is None
+    assert knot_steps([0.0, 1e-6, 1.0]) == 1_000_000 and knot_steps([0.0, 1e-7, 1.0]) is None
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-1e3, 1e3, allow_nan=False), st.floats(1e-4, 1e3, allow_nan=False),
+       st.lists(st.integers(1, 60), min_size=1, max_size=6))
+def test_knot_steps_of_commensurate_knots(t0, unit, gaps):
+    """Knots t0 + n_k u: the least mesh has N / gcd(N, n_1, ..., n_K) steps (N = n_last),
+    whatever the float rounding of the times."""
+    n = np.cumsum(gaps)
+    t = [t0] + [t0 + float(k) * unit for k in n]
+    expected = int(n[-1]) // math.gcd(int(n[-1]), *(int(k) for k in n))
+    assert knot_steps(t) == expected
+
+
+def test_hertz_semi_axes_is_the_hertz_contact_radius():
+    """Elastic sphere: a = (3 W R / (4 E*))^(1/3) of analytic.hertz_sphere (rel 1e-12);
+    the window's largest creep factor for a Maxwell body (phi = 2 at t = t'), phi(0) = 1
+    with moduli="instantaneous"."""
+    from contactpipe import analytic
+    s = Scene.from_dict(tomllib.loads(TINY_CREEP))
+    e_star = 105e9 / (1 - 0.3**2)
+    glassy = analytic.hertz_sphere(1000.0, 0.018, e_star).contact_radius
+    relaxed = analytic.hertz_sphere(1000.0, 0.018, e_star / 2).contact_radius
+    assert s.hertz_semi_axes("instantaneous") == pytest.approx((glassy, glassy), rel=1e-12)
+    assert s.hertz_semi_axes() == pytest.approx((relaxed, relaxed), rel=1e-12)
+    punch = s.replace({"geometry": {"shape": "flat_punch", "radius": 1e-3}})
+    assert punch.hertz_semi_axes() == (1e-3, 1e-3)
+    with pytest.raises(ValueError, match="moduli"):
+        s.hertz_semi_axes("glassy")
+
+
+EXTREMES = [5e-324, 1e-300, 1e-30, 1e-3, 1.0, 1e30, 1e300, 1.7976931348623157e308]
+
+
+@st.composite
+def extreme_scenes(draw):
+    x = st.sampled_from(EXTREMES)
+    d = tomllib.loads(TINY_CREEP)
+    shape = draw(st.sampled_from(["sphere", "ellipsoid", "flat_punch"]))
+    d["geometry"] = ({"shape": shape, "radii": [draw(x), draw(x)]} if shape == "ellipsoid"
+                     else {"shape": shape, "radius": draw(x)})
+    creep = draw(st.sampled_from(["maxwell", "kelvin_voigt", "zener", "prony", "tabulated"]))
+    young = draw(x)
+    body = {"material": "viscoelastic", "young": young, "poisson": draw(st.sampled_from(
+        [0.0, 0.3, 0.5])), "creep": creep}
+    if creep == "maxwell":
+        body["relaxation_time"] = draw(x)
+    elif creep in ("kelvin_voigt", "zener"):
+        body["retardation_time"] = draw(x)
+        if creep == "zener":
+            body["relaxed_young"] = young * draw(st.sampled_from([1e-300, 1e-3, 0.5]))
+    elif creep == "prony":
+        body["terms"] = [[draw(x), draw(x)]]
+        body["relaxation_time"] = draw(x)
+    else:
+        body["table"] = [[0.0, draw(x)], [draw(x), 1.7976931348623157e308]]
+    d[draw(st.sampled_from(["indenter", "halfspace"]))] = body
+    d["load"] = {"time": [0.0, draw(x)], "normal_force": draw(x)}
+    d["grid"]["size"] = draw(st.sampled_from(["auto", [draw(x), draw(x)]]))
+    if draw(st.booleans()):
+        d["solver"] = {"accuracy": draw(st.sampled_from(["fast", "accurate"]))}
+    return d
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(extreme_scenes())
+def test_extreme_constants_never_warn(d):
+    """Validation and the scene's derived quantities with constants from 5e-324 to 1.8e308:
+    a scene or one SceneError, never a warning (numpy's RuntimeWarnings included) nor
+    another exception."""
+    import warnings
+
+    from contactpipe.accuracy import resolve_accuracy
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            s = Scene.from_dict(d)
+        except SceneError as err:
+            assert all("\n" not in p for p in err.problems)
+            return
+        s.resolved_grid_size()
+        s.hertz_semi_axes()
+        s.hertz_semi_axes("instantaneous")
+        s.instants()
+        assert Scene.from_toml_text(s.to_toml()) == s
+        try:
+            resolve_accuracy(s)
+        except SceneError:
+            pass
 
 
 # ----------------------------------------------------------------------------- bodies
@@ -417,6 +554,7 @@ def scene_dicts(draw):
     mu = draw(st.sampled_from([0.0, draw(st.floats(0.0, 2.0, **finite))]))
     load = {}
     force = st.floats(1e-3, 1e6, **finite)
+    commensurate = True  # the knots lie on a uniform mesh (a fretting preset's do)
     if mu > 0 and draw(st.booleans()):
         W = draw(force)
         load["normal_force"] = W
@@ -428,7 +566,14 @@ def scene_dicts(draw):
     else:
         n = draw(st.integers(1, 6))
         t0 = draw(st.floats(-10, 10, **finite))
-        dts = draw(st.lists(st.floats(1e-3, 10, **finite), min_size=n - 1, max_size=n - 1))
+        commensurate = draw(st.booleans())
+        if not commensurate:  # any knots: time.steps is then given (below)
+            dts = draw(st.lists(st.floats(1e-3, 10, **finite), min_size=n - 1,
+                                max_size=n - 1))
+        else:  # commensurate knots: the default mesh holds them all
+            unit = draw(st.floats(1e-3, 10, **finite))
+            dts = [k * unit for k in draw(st.lists(st.integers(1, 12), min_size=n - 1,
+                                                   max_size=n - 1))]
         load["time"] = [t0] + [float(x) for x in t0 + np.cumsum(dts)]
         if draw(st.booleans()):
             W = [draw(force) for _ in range(n)]
@@ -446,6 +591,11 @@ def scene_dicts(draw):
                                             for f, w, a in zip(frac, W, ang)]
     if draw(st.booleans()):
         load["preload"] = draw(st.sampled_from(["frictional", "frictionless"]))
+    window = (load["fretting"]["window"] if "fretting" in load
+              else load["time"][-1] - load["time"][0])
+    for body in (indenter, halfspace):  # a creep table must reach the end of the window
+        if body.get("creep") == "tabulated" and body["table"][-1][0] < window:
+            body["table"].append([window, body["table"][-1][1]])
     no_instant = _phi0_zero(indenter) or _phi0_zero(halfspace)
     grid = {"points": [draw(st.integers(8, 64)), draw(st.integers(8, 64))]}
     grid["size"] = ("auto" if not no_instant and draw(st.booleans())
@@ -456,7 +606,7 @@ def scene_dicts(draw):
         d["name"] = draw(st.text(min_size=1, max_size=12))
     if mu > 0 or draw(st.booleans()):
         d["friction"] = {"mu": mu}
-    if n > 1 and draw(st.booleans()):
+    if n > 1 and (not commensurate or draw(st.booleans())):
         d["time"] = {"steps": draw(st.integers(1, 500))}
     if draw(st.booleans()):
         d["solver"] = {
@@ -488,6 +638,10 @@ def test_random_valid_scenes_round_trip(d):
     assert Scene.from_dict(copy.deepcopy(out)).digest() == s.digest()
     t, W, T1, T2 = s.instants()
     assert len(t) == s.time.steps + 1 and np.all(np.isfinite(W))
+    if "time" not in d:  # the default mesh holds every knot
+        knots = s.load.knots()[0]
+        span = max(knots[-1] - knots[0], 1e-300)
+        assert all(np.min(np.abs(t - tk)) <= 1e-9 * span + 1e-12 * abs(tk) for tk in knots)
     if s.grid.size == "auto":
         assert all(L > 0 and math.isfinite(L) for L in s.resolved_grid_size())
 

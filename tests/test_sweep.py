@@ -18,7 +18,8 @@ from contactpipe.pipeline import cli
 from contactpipe.archive import open_archive
 from contactpipe.exceptions import ArchiveError, SceneError
 from contactpipe.scene import Scene
-from contactpipe.pipeline.sweep import (SweepLockedError, load_sweep_file, open_sweep,
+from contactpipe.pipeline.config import load_sweep_file, read_sweep_file
+from contactpipe.pipeline.sweep import (SweepLockedError, open_sweep,
                                register_parameter, sweep, with_window)
 from contactpipe.testing import TINY_SCENES
 
@@ -387,7 +388,7 @@ def test_sweep_file_relative_base_and_dotted_axes(tmp_path, creep):
     base, axes, mode = load_sweep_file(f)
     assert base == creep and mode == "zip"
     assert axes == {"friction.mu": [0.0, 0.1], "load.normal_force": [500.0, 600.0]}
-    sf = sweep_mod.read_sweep_file(f)
+    sf = read_sweep_file(f)
     assert sf.scheduler == "tcp://127.0.0.1:8786" and sf.n_workers == 3
 
     bad = tmp_path / "bad.toml"
@@ -396,7 +397,7 @@ def test_sweep_file_relative_base_and_dotted_axes(tmp_path, creep):
         load_sweep_file(bad)
     msg = str(info.value)
     for part in ("no such scene file", "mode must be one of product, zip",
-                 "unknown key speed", "axes.mu must be a non-empty list"):
+                 "unknown key 'speed'", "axes.mu must be a non-empty list"):
         assert part in msg
     assert cli.main(["sweep", str(bad), "-o", str(tmp_path / "x")]) == 2
 

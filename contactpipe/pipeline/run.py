@@ -72,11 +72,12 @@ import pathlib
 import sys
 import time as _time
 
-from ..exceptions import ArchiveError, ContactpipeError, SceneError
+from ..exceptions import ArchiveError, ContactpipeError
 from ..exceptions import one_line as _one_line
-from ..files import (TEMP_SUFFIX, LockedError, atomic_path, exclusive_lock, read_toml, utc_now as _now,
+from ..files import (TEMP_SUFFIX, LockedError, atomic_path, exclusive_lock, utc_now as _now,
                      write_json as _write_json)
-from .sweep import SweepLockedError, _read_sweep_table, read_dask_table, read_sweep_file, sweep
+from .config import CLOSED_FORM, FIGURES, MEMBER_FIGURES, PipelineSpec, read_pipeline_file
+from .sweep import SweepLockedError, sweep
 
 __all__ = ["run_pipeline", "read_pipeline_file", "PipelineSpec", "PipelineResult",
            "PipelineLockedError", "MEMBER_FIGURES", "FIGURES", "LOCK", "SUMMARY",
@@ -84,171 +85,11 @@ __all__ = ["run_pipeline", "read_pipeline_file", "PipelineSpec", "PipelineResult
 
 LOCK = ".pipeline.lock"
 SUMMARY = "summary.json"
-MEMBER_FIGURES = ("profiles", "hysteresis", "radii", "maps")
-FIGURES = MEMBER_FIGURES + ("sweep",)
-DEFAULT_FIGURES = ("profiles", "hysteresis", "radii", "sweep")
-CLOSED_FORM = "closed_form"
 EXIT_LOCKED = 3
 
 
 class PipelineLockedError(LockedError):
     """Another pipeline run (or a sweep) holds the lock of the output folder."""
-
-
-# ------------------------------------------------------------------- the file
-
-@dataclasses.dataclass
-class PipelineSpec:
-    """A pipeline file, read and validated (:func:`read_pipeline_file`)."""
-
-    path: pathlib.Path
-    name: str
-    out: pathlib.Path
-    base: object                          # Scene
-    axes: dict
-    mode: str = "product"
-    reference: str | pathlib.Path | None = CLOSED_FORM   # CLOSED_FORM, a path, or None
-    figures: tuple = DEFAULT_FIGURES
-    variables: tuple = ("contact_area",)
-    scheduler: str | None = None
-    n_workers: int | None = None
-    threads_per_worker: int = 1
-    retries: int = 0
-
-
-_TOP = ("name", "out", "sweep", "compare", "plot", "dask")
-
-
-def read_pipeline_file(path) -> PipelineSpec:
-    """Read and validate a pipeline file (module docstring).
-
-    Raises
-    ------
-    SceneError
-        Every problem of the file, one per line (unknown keys, no sweep, no out, a bad
-        sweep or scene, unknown figures, a missing reference archive).
-    FileNotFoundError
-        The file does not exist.
-    """
-    path = pathlib.Path(path)
-    d = read_toml(path, "pipeline")
-    here = path.resolve().parent
-    problems = []
-    for k in d:
-        if k not in _TOP:
-            problems.append(f"unknown key {k!r} at the top level; allowed keys: "
-                            f"{', '.join(_TOP)}")
-    name = d.get("name", path.stem)
-    if not isinstance(name, str) or not name:
-        problems.append(f"name must be a non-empty string, got {name!r}")
-        name = path.stem
-    sw = d.get("sweep")
-    base = axes = None
-    mode = "product"
-    dask = {}
-    out = d.get("out")
-    if not isinstance(sw, dict):
-        problems.append("[sweep] is missing: give file = \"sweep.toml\" or an inline "
-                        "base = \"scene.toml\" with [sweep.axes]" if sw is None else
-                        f"sweep must be a table, got {sw!r}")
-    else:
-        sw = dict(sw)
-        if "out" in sw:
-            if out is not None:
-                problems.append("out is given twice (top level and [sweep]); keep one")
-            out = sw.pop("out")
-        if "file" in sw:
-            extra = [k for k in sw if k != "file"]
-            if extra:
-                problems.append(f"sweep.file cannot be combined with sweep."
-                                f"{', sweep.'.join(extra)}: put them in the sweep file")
-            v = sw["file"]
-            if not isinstance(v, str) or not v:
-                problems.append(f"sweep.file must be the path of a sweep file, got {v!r}")
-            else:
-                p = pathlib.Path(v).expanduser()
-                p = p if p.is_absolute() else here / p
-                if not p.is_file():
-                    problems.append(f"sweep.file = {v!r}: no such sweep file ({p})")
-                else:
-                    try:
-                        sf = read_sweep_file(p)
-                    except SceneError as err:
-                        problems.extend(f"sweep.file: {q}" for q in err.problems)
-                    else:
-                        base, axes, mode = sf.base, sf.axes, sf.mode
-                        dask = {k: getattr(sf, k) for k in
-                                ("scheduler", "n_workers", "threads_per_worker", "retries")}
-        else:
-            base, axes, mode = _read_sweep_table(
-                sw, "sweep.", here, problems, allowed=("base", "scene", "mode", "axes"))
-    if out is None:
-        problems.append("out is missing: the folder of the member archives and products, "
-                        "e.g. out = \"runs/paper-fig3\" (relative to this file)")
-    elif not isinstance(out, str) or not out:
-        problems.append(f"out must be a folder path, got {out!r}")
-        out = None
-    else:
-        out = pathlib.Path(out).expanduser()
-        out = out if out.is_absolute() else here / out
-    reference = CLOSED_FORM
-    cmp_ = d.get("compare", {})
-    if not isinstance(cmp_, dict):
-        problems.append(f"compare must be a table, got {cmp_!r}")
-    else:
-        for k in cmp_:
-            if k != "reference":
-                problems.append(f"unknown key compare.{k}; allowed keys: reference")
-        v = cmp_.get("reference", CLOSED_FORM)
-        if not isinstance(v, str) or not v:
-            problems.append(f"compare.reference must be \"closed_form\", \"none\" or an "
-                            f"archive path, got {v!r}")
-        elif v == "none":
-            reference = None
-        elif v != CLOSED_FORM:
-            p = pathlib.Path(v).expanduser()
-            p = p if p.is_absolute() else here / p
-            if not p.is_file():
-                problems.append(f"compare.reference = {v!r}: no such archive ({p}); give "
-                                f"an archive path, \"closed_form\" or \"none\"")
-            reference = p
-    figures, variables = DEFAULT_FIGURES, ("contact_area",)
-    plot = d.get("plot", {})
-    if not isinstance(plot, dict):
-        problems.append(f"plot must be a table, got {plot!r}")
-    else:
-        for k in plot:
-            if k not in ("figures", "variables"):
-                problems.append(f"unknown key plot.{k}; allowed keys: figures, variables")
-        v = plot.get("figures", list(DEFAULT_FIGURES))
-        if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
-            problems.append(f"plot.figures must be a list of names from "
-                            f"{', '.join(FIGURES)}, got {v!r}")
-        else:
-            bad = [x for x in v if x not in FIGURES]
-            if bad:
-                problems.append(f"plot.figures: unknown figure {', '.join(map(repr, bad))}; "
-                                f"allowed: {', '.join(FIGURES)}")
-            figures = tuple(dict.fromkeys(x for x in v if x in FIGURES))
-        v = plot.get("variables", ["contact_area"])
-        if isinstance(v, str):
-            v = [v]
-        from ..nomenclature import VARIABLES, SERIES
-        series = [k for k, e in VARIABLES.items() if e["dims"] == SERIES]
-        if not isinstance(v, list) or not v or not all(isinstance(x, str) for x in v):
-            problems.append(f"plot.variables must be a list of series names, got {v!r}")
-        else:
-            bad = [x for x in v if x not in series]
-            if bad:
-                problems.append(f"plot.variables: {', '.join(map(repr, bad))} is not a time "
-                                f"series of the archive; allowed: {', '.join(series)}")
-            variables = tuple(v)
-    dask.update(read_dask_table(d.get("dask"), "dask", problems))
-    if problems:
-        raise SceneError([f"{path.name}: {p}" for p in problems])
-    dask = {k: v for k, v in dask.items() if v is not None}
-    return PipelineSpec(path=path, name=name, out=out, base=base, axes=axes, mode=mode,
-                        reference=reference, figures=figures, variables=variables, **dask)
 
 
 # ------------------------------------------------------------------- products

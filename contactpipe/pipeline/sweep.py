@@ -99,8 +99,9 @@ from typing import Callable
 
 from .._version import __version__
 from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line as _one_line
-from ..files import (LockedError, TEMP_SUFFIX, exclusive_lock, read_toml,
+from ..files import (LockedError, TEMP_SUFFIX, exclusive_lock,
                      utc_now as _now, write_json as _write_json)
+from .config import MODES, SweepFile, load_sweep_file, read_sweep_file
 
 
 __all__ = ["sweep", "open_sweep", "SweepResult", "Member", "SweepLockedError",
@@ -110,7 +111,6 @@ __all__ = ["sweep", "open_sweep", "SweepResult", "Member", "SweepLockedError",
 
 MANIFEST = "manifest.json"
 LOCK = ".sweep.lock"
-MODES = ("product", "zip")
 SYNCHRONOUS = "synchronous"
 MANIFEST_FORMAT = 1
 _MAX_PROBLEMS = 25
@@ -953,152 +953,6 @@ def _grid(cells, shape, prefix):
     if len(prefix) == len(shape):
         return cells[prefix]
     return [_grid(cells, shape, prefix + (i,)) for i in range(shape[len(prefix)])]
-
-
-# ------------------------------------------------------------------- sweep files
-
-@dataclasses.dataclass
-class SweepFile:
-    """A sweep file, read and validated (:func:`read_sweep_file`)."""
-
-    path: pathlib.Path | None
-    base: object                    # Scene
-    axes: dict
-    mode: str = "product"
-    scheduler: str | None = None
-    n_workers: int | None = None
-    threads_per_worker: int = 1
-    retries: int = 0
-
-
-_SWEEP_KEYS = ("base", "scene", "mode", "axes", "dask", "name")
-_DASK_KEYS = ("scheduler", "n_workers", "threads_per_worker", "retries")
-
-
-def _flatten_axes(table, prefix="") -> dict:
-    out = {}
-    for k, v in table.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, dict):
-            out.update(_flatten_axes(v, key + "."))
-        else:
-            out[key] = v
-    return out
-
-
-def read_dask_table(raw, where: str, problems: list) -> dict:
-    """Validate a ``[dask]`` table; returns {scheduler, n_workers, threads_per_worker,
-    retries} for the keys given."""
-    out = {}
-    if raw is None:
-        return out
-    if not isinstance(raw, dict):
-        problems.append(f"{where} must be a table with keys {', '.join(_DASK_KEYS)}, got "
-                        f"{raw!r}")
-        return out
-    for k in raw:
-        if k not in _DASK_KEYS:
-            problems.append(f"unknown key {where}.{k}; allowed keys: {', '.join(_DASK_KEYS)}")
-    if "scheduler" in raw:
-        v = raw["scheduler"]
-        if not isinstance(v, str):
-            problems.append(f"{where}.scheduler must be a scheduler address such as "
-                            f"'tcp://host:8786', 'synchronous' or '' (a LocalCluster), got "
-                            f"{v!r}")
-        elif v.strip():
-            out["scheduler"] = v.strip()
-    for k, low in (("n_workers", 1), ("threads_per_worker", 1), ("retries", 0)):
-        if k in raw:
-            v = raw[k]
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
-                problems.append(f"{where}.{k} must be an integer >= {low}, got {v!r}")
-            else:
-                out[k] = v
-    return out
-
-
-def _read_sweep_table(d: dict, where: str, base_dir: pathlib.Path, problems: list,
-                      allowed=_SWEEP_KEYS):
-    """(base Scene or None, axes, mode) from a sweep table; problems appended."""
-    from ..scene import Scene
-    for k in d:
-        if k not in allowed:
-            problems.append(f"unknown key {where}{k}; allowed keys: {', '.join(allowed)}")
-    base = None
-    if "base" in d and "scene" in d:
-        problems.append(f"{where}base and an inline [{where}scene] table cannot both be "
-                        f"given; keep one")
-    elif "base" in d:
-        v = d["base"]
-        if not isinstance(v, str) or not v:
-            problems.append(f"{where}base must be the path of a scene file (relative to "
-                            f"this file), got {v!r}")
-        else:
-            p = pathlib.Path(v).expanduser()
-            p = p if p.is_absolute() else base_dir / p
-            if not p.is_file():
-                problems.append(f"{where}base = {v!r}: no such scene file ({p})")
-            else:
-                try:
-                    base = Scene.from_toml(p)
-                except SceneError as err:
-                    problems.extend(f"{where}base ({p.name}): {q}" for q in err.problems)
-    elif "scene" in d:
-        v = d["scene"]
-        if not isinstance(v, dict):
-            problems.append(f"{where}scene must be a table (the scene), got {v!r}")
-        else:
-            import tomli_w
-            try:
-                base = Scene.from_toml_text(tomli_w.dumps(v), base_dir=base_dir)
-            except SceneError as err:
-                problems.extend(f"{where}scene: {q}" for q in err.problems)
-    else:
-        problems.append(f"{where}base is missing: give a scene file (base = \"scene.toml\") "
-                        f"or an inline [{where}scene] table")
-    mode = d.get("mode", "product")
-    if mode not in MODES:
-        problems.append(f"{where}mode must be one of {', '.join(MODES)}, got {mode!r}")
-    axes = {}
-    raw = d.get("axes")
-    if raw is None:
-        problems.append(f"[{where}axes] is missing: give at least one axis, e.g. "
-                        f"\"friction.mu\" = [0.05, 0.1]")
-    elif not isinstance(raw, dict) or not raw:
-        problems.append(f"[{where}axes] must be a table of axis = [values], got {raw!r}")
-    else:
-        for k, v in _flatten_axes(raw).items():
-            if not isinstance(v, list) or not v:
-                problems.append(f"{where}axes.{k} must be a non-empty list of values, "
-                                f"got {v!r}")
-            else:
-                axes[k] = v
-    return base, axes, mode
-
-
-def read_sweep_file(path) -> SweepFile:
-    """Read and validate a sweep file (CONTRACT §3b, with the ``[dask]`` extension).
-
-    Raises
-    ------
-    SceneError
-        Every problem of the file (unknown keys, a missing base, bad axes or mode, a bad
-        base scene), one per line; FileNotFoundError when it does not exist.
-    """
-    path = pathlib.Path(path)
-    d = read_toml(path, "sweep")
-    problems = []
-    base, axes, mode = _read_sweep_table(d, "", path.resolve().parent, problems)
-    dask = read_dask_table(d.get("dask"), "dask", problems)
-    if problems:
-        raise SceneError([f"{path.name}: {p}" for p in problems])
-    return SweepFile(path=path, base=base, axes=axes, mode=mode, **dask)
-
-
-def load_sweep_file(path):
-    """(base Scene, axes, mode) of a sweep file (CONTRACT §3b); see :func:`read_sweep_file`."""
-    sf = read_sweep_file(path)
-    return sf.base, sf.axes, sf.mode
 
 
 # ------------------------------------------------------------------- command line

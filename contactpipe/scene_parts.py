@@ -1,0 +1,795 @@
+"""The parts of a scene: one frozen dataclass per table of the scene file.
+
+Each part describes its table as data (``FIELDS``, a tuple of
+:class:`~contactpipe.tables.Field`: name, kind, what is allowed, default, unit) and is
+read by the one loop of :class:`~contactpipe.tables.Reader`. The rules that tie keys
+together are plain functions next to their part: a shape's keys (:class:`Geometry`), a
+material's and a creep model's keys (:class:`BodySpec`), the lengths of a load program
+(:class:`Load`). Rules across parts (gross sliding, the default time mesh, the automatic
+grid) live in :mod:`contactpipe.scene`.
+
+Every part is validated on construction (``Geometry("sphere", radius=-1)`` raises a
+:class:`~contactpipe.SceneError`) and written back by :meth:`Part.to_dict`.
+
+Units: SI (m, s, N, Pa) everywhere; angles in degrees.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import geometry as _geometry
+from . import materials
+from .exceptions import SceneError
+from .tables import Field, Reader, is_sequence, show
+
+__all__ = ["Part", "Geometry", "BodySpec", "Friction", "Fretting", "Load", "Grid",
+           "TimeMesh", "Solver", "Output", "knot_steps", "SHAPES", "MATERIALS",
+           "CREEP_MODELS", "MAX_STEPS", "MAX_CYCLES", "MIN_POINTS", "MAX_POINTS"]
+
+SHAPES = ("sphere", "ellipsoid", "flat_punch", "surface")
+MATERIALS = ("rigid", "elastic", "viscoelastic")
+CREEP_MODELS = ("maxwell", "kelvin_voigt", "zener", "prony", "tabulated")
+PRELOADS = ("frictional", "frictionless")
+TIME_RULES = ("linear", "step_start")
+TANGENTIAL_MODELS = ("auto", "scalar", "vector")
+FFT_BACKENDS = ("auto", "pyfftw", "scipy")
+ACCURACIES = ("fast", "balanced", "accurate")
+PRECISIONS = ("float64", "float32")
+MIN_POINTS, MAX_POINTS = 8, 4096
+MAX_TOLERANCE = 1e-2
+#: Caps on counts, against absurd sizes (each far beyond a practical simulation).
+MAX_CYCLES = 100_000
+MAX_STEPS = 1_000_000
+MAX_PRELOAD_SUBSTEPS = 10_000
+MAX_THREADS = 1024
+
+#: Keys each shape requires and allows.
+SHAPE_KEYS = {
+    "sphere": (("radius",), ()),
+    "ellipsoid": (("radii",), ()),
+    "flat_punch": (("radius",), ("height",)),
+    "surface": (("file",), ()),
+}
+#: Keys each creep model requires and allows (the ``tabulated`` model is an extension).
+CREEP_KEYS = {
+    "maxwell": (("relaxation_time",), ()),
+    "kelvin_voigt": (("retardation_time",), ()),
+    "zener": (("relaxed_young", "retardation_time"), ()),
+    "prony": (("terms",), ("relaxation_time",)),
+    "tabulated": (("table",), ()),
+}
+MODEL_KEYS = ("relaxation_time", "retardation_time", "relaxed_young", "terms", "table")
+
+
+def _positive(x) -> bool:
+    return x > 0
+
+
+def _at_least_1(n) -> bool:
+    return n >= 1
+
+
+def _plain(v):
+    """Tuples -> lists, recursively (TOML and JSON want lists)."""
+    if isinstance(v, (tuple, list)):
+        return [_plain(x) for x in v]
+    return v
+
+
+class Part:
+    """Base of the scene's parts: a frozen dataclass read from its table by :meth:`read`
+    (validated on construction too) and written back by :meth:`to_dict`.
+
+    A subclass sets ``PATH`` (its dotted name when constructed alone, for messages) and
+    ``FIELDS`` (one :class:`~contactpipe.tables.Field` per dataclass field, in file
+    order); it overrides :meth:`read` only to add rules that tie keys together.
+    """
+
+    PATH = ""
+    FIELDS: tuple = ()
+
+    def __post_init__(self):
+        problems = []
+        new = type(self).read(self.to_fields(), self.PATH, problems)
+        if problems or new is None:
+            raise SceneError(problems or [f"{self.PATH}: invalid"])
+        for f in dataclasses.fields(self):
+            object.__setattr__(self, f.name, getattr(new, f.name))
+
+    @classmethod
+    def field(cls, name: str) -> Field:
+        """The description of key ``name``."""
+        return next(f for f in cls.FIELDS if f.name == name)
+
+    @classmethod
+    def read(cls, raw, path: str, problems: list):
+        """The part from its table (a dict), or None with a message per problem appended
+        to ``problems``. The default reads every field with no rule across keys."""
+        r = Reader(raw, path, problems)
+        r.check_keys(cls.FIELDS)
+        values = r.read(cls.FIELDS)
+        return cls.make(**values) if r.ok else None
+
+    @classmethod
+    def make(cls, **values):
+        """An instance from already validated values (no check)."""
+        obj = object.__new__(cls)
+        for f in dataclasses.fields(cls):
+            object.__setattr__(obj, f.name, values.get(f.name))
+        return obj
+
+    def to_fields(self) -> dict:
+        """The fields as they are held (tuples, parts, None for absent)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def to_dict(self) -> dict:
+        """The part as a plain dict (lists, floats, ints, str, bool) without its None
+        values (TOML has no null)."""
+        out = {}
+        for k, v in self.to_fields().items():
+            if v is not None:
+                out[k] = v.to_dict() if isinstance(v, Part) else _plain(v)
+        return out
+
+
+# ----------------------------------------------------------------------------- geometry
+
+_POSITIVE_M = "a finite number > 0 [m]"
+
+
+@dataclass(frozen=True)
+class Geometry(Part):
+    """Composite initial gap of the two bodies; first contact at the origin.
+
+    Parameters
+    ----------
+    shape : {"sphere", "ellipsoid", "flat_punch", "surface"}
+    radius : float, optional
+        Sphere radius, or radius of the flat punch's end [m].
+    radii : (float, float), optional
+        Ellipsoid principal radii (R1 along x1, R2 along x2) [m].
+    file : str, optional
+        Surface file (netCDF variable ``gap`` over x1, x2, or a ``.npy`` on the grid);
+        stored as an absolute path.
+    height : float, optional
+        Flat punch only: gap outside the flat end [m]; default the radius.
+    """
+
+    shape: str
+    radius: float | None = None
+    radii: tuple | None = None
+    file: str | None = None
+    height: float | None = None
+
+    PATH = "geometry"
+    FIELDS = (
+        Field("shape", "choice", options=SHAPES, required=True),
+        Field("radius", "number", _POSITIVE_M, ok=_positive, unit="m"),
+        Field("radii", "numbers", "two finite numbers > 0 [m], [R1, R2] along x1, x2",
+              ok=_positive, length=2, unit="m"),
+        Field("file", "path", "the path of a netCDF file (variable 'gap' over x1, x2 [m]) "
+                              "or a .npy array"),
+        Field("height", "number", _POSITIVE_M, ok=_positive, unit="m"),
+    )
+
+    @classmethod
+    def read(cls, raw, path, problems):
+        r = Reader(raw, path, problems)
+        r.check_keys(cls.FIELDS)
+        shape = r.value(cls.field("shape"), need="")
+        if shape is None:
+            return None
+        req, opt = SHAPE_KEYS[shape]
+        for f in cls.FIELDS[1:]:
+            if f.name not in req + opt:
+                r.forbid(f.name, f"by shape = {shape!r} (it takes: {', '.join(req + opt)})")
+        v = r.read([f for f in cls.FIELDS[1:] if f.name in req + opt],
+                   need=f" for shape = {shape!r}", require=req)
+        if shape == "flat_punch" and v["height"] is None and not r.has("height"):
+            v["height"] = v["radius"]
+        if v.get("file") is not None:
+            v["file"] = os.path.abspath(os.path.expanduser(v["file"]))
+            r.add(_geometry.check_surface(v["file"]))
+        return cls.make(shape=shape, **v) if r.ok else None
+
+    def gap(self, x1, x2):
+        """Initial gap (N1, N2) [m] at the cell centres ``x1`` (N1,), ``x2`` (N2,) [m]."""
+        if self.shape == "sphere":
+            return _geometry.sphere_gap(x1, x2, self.radius)
+        if self.shape == "ellipsoid":
+            return _geometry.ellipsoid_gap(x1, x2, self.radii)
+        if self.shape == "flat_punch":
+            return _geometry.flat_punch_gap(x1, x2, self.radius, self.height)
+        return _geometry.surface_gap(x1, x2, self.file)
+
+
+# ----------------------------------------------------------------------------- bodies
+
+_TABLE_WHAT = ("a list of at least 2 [t, phi] rows: t [s] ascending from 0, phi [1] "
+               "non-decreasing, > 0 after t = 0")
+
+
+def _check_table(table, key) -> list:
+    """Problems of a tabulated creep function phi(t)."""
+    t = [row[0] for row in table]
+    phi = [row[1] for row in table]
+    out = []
+    if len(table) < 2:
+        out.append(f"{key} must be {_TABLE_WHAT}, got {len(table)} row")
+    if t[0] != 0.0:
+        out.append(f"{key} must start at t = 0, got t = {t[0]:g} s in its first row")
+    if any(b <= a for a, b in zip(t, t[1:])):
+        out.append(f"{key} times must be strictly ascending, got t = {show(t)}")
+    if any(b < a for a, b in zip(phi, phi[1:])):
+        out.append(f"{key} phi must not decrease (a creep function grows with time), "
+                   f"got phi = {show(phi)}")
+    if phi[0] < 0 or any(p <= 0 for p in phi[1:]):
+        out.append(f"{key} phi must be > 0 (it may be 0 at t = 0 only), got phi = "
+                   f"{show(phi)}")
+    return out
+
+
+@dataclass(frozen=True)
+class BodySpec(Part):
+    """One body's material, as the scene file gives it.
+
+    Parameters
+    ----------
+    material : {"rigid", "elastic", "viscoelastic"}
+        A rigid body takes no constants.
+    young : float
+        Young modulus [Pa]: the instantaneous (glassy) one for a viscoelastic body, the
+        long-term one for Kelvin-Voigt, the one phi is normalised by for a table.
+    poisson : float
+        Poisson ratio [1], in [0, 0.5]; constant in time.
+    creep : {"maxwell", "kelvin_voigt", "zener", "prony", "tabulated"}
+        Viscoelastic only; each model takes exactly its keys (:data:`CREEP_KEYS`).
+    relaxation_time : float
+        t' [s] (maxwell; optional dashpot of prony).
+    retardation_time : float
+        tau [s] (kelvin_voigt, zener).
+    relaxed_young : float
+        E_inf < young [Pa] (zener).
+    terms : tuple of (c, tau)
+        Prony terms, c > 0 [1], tau > 0 [s].
+    table : tuple of (t, phi)
+        Tabulated phi(t): t [s] ascending from 0, phi non-decreasing, > 0 after t = 0;
+        it must reach the end of the load window (checked by the scene).
+    """
+
+    material: str
+    young: float | None = None
+    poisson: float | None = None
+    creep: str | None = None
+    relaxation_time: float | None = None
+    retardation_time: float | None = None
+    relaxed_young: float | None = None
+    terms: tuple | None = None
+    table: tuple | None = None
+
+    PATH = "body"
+    FIELDS = (
+        Field("material", "choice", options=MATERIALS, required=True),
+        Field("young", "number", "a finite number > 0 [Pa]", ok=_positive, unit="Pa"),
+        Field("poisson", "number", "a number in [0, 0.5]", ok=lambda x: 0.0 <= x <= 0.5,
+              unit="1"),
+        Field("creep", "choice", options=CREEP_MODELS),
+        Field("relaxation_time", "number", "t' = eta / G, a finite number > 0 [s]",
+              ok=_positive, unit="s"),
+        Field("retardation_time", "number", "tau, a finite number > 0 [s]", ok=_positive,
+              unit="s"),
+        Field("relaxed_young", "number", "E_inf, a finite number > 0 [Pa] below young",
+              ok=_positive, unit="Pa"),
+        Field("terms", "pairs", "a non-empty list of [c, tau] pairs with c > 0 and tau > 0 "
+                                "[s]", ok=lambda p: p[0] > 0 and p[1] > 0, unit="1, s"),
+        Field("table", "pairs", _TABLE_WHAT, check=_check_table, unit="s, 1"),
+    )
+
+    @classmethod
+    def read(cls, raw, path, problems):
+        r = Reader(raw, path, problems)
+        r.check_keys(cls.FIELDS)
+        material = r.value(cls.field("material"), need="")
+        if material is None:
+            return None
+        if material == "rigid":
+            for f in cls.FIELDS[1:]:
+                r.forbid(f.name, "by a rigid body (material = 'rigid' takes no constants)")
+            return cls.make(material="rigid") if r.ok else None
+        ctx = f" for material = {material!r}"
+        v = r.read(cls.FIELDS[1:3], need=ctx, require=("young", "poisson"))
+        if material == "elastic":
+            for k in ("creep",) + MODEL_KEYS:
+                r.forbid(k, "by an elastic body (creep keys need material = 'viscoelastic')")
+            return cls.make(material="elastic", **v) if r.ok else None
+        creep = r.value(cls.field("creep"), need=ctx, required=True)
+        if creep is None:
+            return None
+        req, opt = CREEP_KEYS[creep]
+        for k in MODEL_KEYS:
+            if k not in req + opt:
+                r.forbid(k, f"by creep = {creep!r} (it takes: {', '.join(req + opt)})")
+        v.update(r.read([cls.field(k) for k in MODEL_KEYS if k in req + opt],
+                        need=f" for creep = {creep!r}", require=req))
+        young, relaxed = v["young"], v.get("relaxed_young")
+        if creep == "zener" and young is not None and relaxed is not None and relaxed >= young:
+            r.add(f"{r.key('relaxed_young')} must be below {r.key('young')} = {young:g} Pa "
+                  f"(the relaxed modulus E_inf < the instantaneous E0), got {relaxed:g}")
+        return cls.make(material="viscoelastic", creep=creep, **v) if r.ok else None
+
+    def creep_function(self):
+        """The normalised creep function phi(t) (:data:`materials.ELASTIC` if none)."""
+        if self.material != "viscoelastic":
+            return materials.ELASTIC
+        if self.creep == "maxwell":
+            return materials.maxwell(self.relaxation_time)
+        if self.creep == "kelvin_voigt":
+            return materials.kelvin_voigt(self.retardation_time)
+        if self.creep == "zener":
+            return materials.zener(self.young, self.relaxed_young, self.retardation_time)
+        if self.creep == "prony":
+            return materials.prony(self.terms, self.relaxation_time)
+        t, phi = zip(*self.table)
+        return materials.TabulatedCreep(t=tuple(t), phi=tuple(phi))
+
+    def body(self) -> materials.Body:
+        """The :class:`materials.Body` this spec describes."""
+        if self.material == "rigid":
+            return materials.Body(kind="rigid")
+        return materials.Body(kind=self.material, young=self.young, poisson=self.poisson,
+                              creep=self.creep_function())
+
+
+# ----------------------------------------------------------------------------- friction
+
+@dataclass(frozen=True)
+class Friction(Part):
+    """Coulomb friction between the bodies.
+
+    Parameters
+    ----------
+    mu : float
+        Friction coefficient [1], >= 0; 0 (the default) is frictionless.
+    """
+
+    mu: float = 0.0
+
+    PATH = "friction"
+    FIELDS = (Field("mu", "number", "a finite number >= 0", ok=lambda x: x >= 0,
+                    default=0.0, unit="1"),)
+
+
+# ----------------------------------------------------------------------------- load
+
+def knot_steps(t, limit: int = MAX_STEPS):
+    """The least number of uniform steps from ``t[0]`` to ``t[-1]`` whose instants hold
+    every knot of ``t``: the least common multiple of the denominators of the knots'
+    positions (t_k - t_0) / (t_n - t_0) written as fractions.
+
+    A knot counts as held when it lies within 1e-9 of a step of an instant (plus the
+    rounding of its float). Returns 0 for a single knot, 1 for two, and None when no
+    such mesh has at most ``limit`` steps (positions incommensurate, or too fine).
+    """
+    t = np.asarray(t, dtype=float)
+    if t.size < 2:
+        return 0
+    span = float(t[-1] - t[0])
+    if not (math.isfinite(span) and span > 0):
+        return None
+    rounding = 8 * np.finfo(float).eps * max(abs(float(t[0])), abs(float(t[-1]))) / span
+    f = (t[1:-1] - t[0]) / span
+    held = np.zeros(f.size, dtype=bool)
+    m = 1
+    while True:
+        # every knot at once on the mesh of m steps; the first one off sets a finer mesh
+        pos = f * m
+        off = np.flatnonzero(~held & (np.abs(pos - np.rint(pos)) > 1e-9 + m * rounding))
+        if off.size == 0:
+            return m
+        q = _least_denominator(float(f[off[0]]), rounding, limit)
+        if q is None:
+            return None
+        if m % q == 0:          # held to 1e-9 of its own step, which m subdivides
+            held[off[0]] = True
+            continue
+        m = m * q // math.gcd(m, q)
+        if m > limit:
+            return None
+
+
+def _least_denominator(f: float, rounding: float, limit: int):
+    """The least q <= limit with |f q - p| <= 1e-9 + q rounding for an integer p, among
+    the continued-fraction convergents p/q of ``f`` (exact on the float); None if none."""
+    num, den = float(f).as_integer_ratio()
+    p0, q0, p1, q1 = 0, 1, 1, 0
+    while den:
+        a, rest = divmod(num, den)
+        p0, q0, p1, q1 = p1, q1, a * p1 + p0, a * q1 + q0
+        if q1 > limit:
+            return None
+        if abs(f * q1 - p1) <= 1e-9 + q1 * rounding:
+            return q1
+        num, den = den, rest
+    return q1 if q1 <= limit else None
+
+
+@dataclass(frozen=True)
+class Fretting(Part):
+    """Fretting-loop preset of the load (``[load.fretting]``).
+
+    The tangential force goes 0 -> +T* -> -T* -> +T* ... at a constant rate under a
+    normal force applied as a step at t = 0. Rising to +T* takes one time unit and each
+    half cycle two, so ``cycles`` = n takes 1 + 4 n units over ``window``: knots at units
+    0, 1, 3, 5, ..., 1 + 4 n. One cycle gives time = [0, tau/5, 3 tau/5, tau] and
+    T = [0, T*, -T*, T*]; the default time mesh then has 1 + 4 n steps.
+
+    Parameters
+    ----------
+    amplitude : float
+        T* [N], > 0.
+    window : float
+        tau, the total duration [s], > 0.
+    cycles : int
+        Number of full cycles (-T* and back to +T*), from 1 to 100 000.
+    direction : float
+        Angle of the tangential force from x1 [deg]; T1 = T cos, T2 = T sin.
+    """
+
+    amplitude: float
+    window: float
+    cycles: int = 1
+    direction: float = 0.0
+
+    PATH = "load.fretting"
+    FIELDS = (
+        Field("amplitude", "number", "T*, a finite number > 0 [N]", ok=_positive,
+              required=True, unit="N"),
+        Field("window", "number", "tau, the total duration, a finite number > 0 [s]",
+              ok=_positive, required=True, unit="s"),
+        Field("cycles", "integer", f"an integer from 1 to {MAX_CYCLES}",
+              ok=lambda n: 1 <= n <= MAX_CYCLES, default=1),
+        Field("direction", "number", "the angle of T from x1, a finite number [deg]",
+              default=0.0, unit="deg"),
+    )
+
+    def knots(self):
+        """(time [s], T [N]) at the knots, T signed along ``direction``."""
+        units = 1 + 4 * self.cycles
+        u = np.array([0] + [1 + 2 * k for k in range(2 * self.cycles + 1)], dtype=float)
+        t = u * self.window / units
+        T = np.array([0.0] + [self.amplitude * (-1.0) ** k
+                              for k in range(2 * self.cycles + 1)])
+        return t, T
+
+    def unit_vector(self):
+        """(cos, sin) of ``direction``, exact on the axes."""
+        a = math.radians(self.direction)
+        c, s = math.cos(a), math.sin(a)
+        c = 0.0 if abs(c) < 1e-15 else c
+        s = 0.0 if abs(s) < 1e-15 else s
+        return c, s
+
+
+def _check_times(t, key):
+    bad = [i for i in range(1, len(t)) if t[i] <= t[i - 1]]
+    if bad:
+        i = bad[0]
+        return (f"{key} must be strictly increasing, got {show(list(t))} (time[{i}] = "
+                f"{t[i]:g} s <= time[{i - 1}] = {t[i - 1]:g} s)")
+    if not math.isfinite(t[-1] - t[0]):
+        return (f"{key} spans {t[0]:g} to {t[-1]:g} s, a duration beyond the range of a "
+                f"float; give times of a finite span")
+    return None
+
+
+_NORMAL_WHAT = ("a force >= 0 [N] (a step at time[0]) or a list with one force >= 0 [N] "
+                "per load.time knot")
+
+
+@dataclass(frozen=True)
+class Load(Part):
+    """The load program, piecewise linear through knots.
+
+    Parameters
+    ----------
+    time : tuple of float
+        Knot times [s], strictly increasing (at least one). Absent (None) with
+        ``fretting``: read the program through :meth:`knots` / :meth:`instants`, which
+        serve both forms.
+    normal_force : float or tuple of float
+        W [N]: a scalar is a step applied at time[0] (W = value at every instant,
+        time[0] included); a list gives one value per knot.
+    tangential_force : tuple, optional
+        T [N] per knot: floats along x1 (T2 = 0), or (T1, T2) pairs. Absent: none.
+    preload : {"frictional", "frictionless"}
+        Whether friction acts during the normal preload.
+    fretting : Fretting, optional
+        A fretting-loop preset instead of ``time`` and ``tangential_force``.
+    """
+
+    time: tuple | None = None
+    normal_force: float | tuple | None = None
+    tangential_force: tuple | None = None
+    preload: str = "frictional"
+    fretting: Fretting | None = None
+
+    PATH = "load"
+    FIELDS = (
+        Field("time", "numbers", "a list of at least 1 strictly increasing times [s]",
+              min_length=1, check=_check_times, unit="s"),
+        Field("normal_force", ("number", "numbers"), _NORMAL_WHAT, ok=lambda x: x >= 0,
+              required=True, unit="N"),
+        Field("tangential_force", ("numbers", "pairs"),
+              "a list of forces [N] along x1 or a list of [T1, T2] pairs [N], one per "
+              "load.time knot", min_length=1, unit="N"),
+        Field("preload", "choice", options=PRELOADS, default="frictional"),
+        Field("fretting", "table", "amplitude [N], window [s], cycles, direction [deg]",
+              part=Fretting),
+    )
+
+    @classmethod
+    def read(cls, raw, path, problems):
+        r = Reader(raw, path, problems)
+        r.check_keys(cls.FIELDS)
+        v = {"preload": r.value(cls.field("preload")), "time": None, "fretting": None,
+             "tangential_force": None}
+        n = None  # number of knots, when known
+        if r.has("fretting"):
+            v["fretting"] = r.value(cls.field("fretting"))
+            if v["fretting"] is not None:
+                n = 2 * v["fretting"].cycles + 2
+            for k in ("time", "tangential_force"):
+                if r.has(k):
+                    r.add(f"{r.key(k)} = {show(r.raw[k])} cannot be given with {path}."
+                          f"fretting: the preset makes the time program and the tangential "
+                          f"force; remove one of them")
+        else:
+            v["time"] = r.value(cls.field("time"), need=" (or a [load.fretting] preset)",
+                                required=True)
+            n = None if v["time"] is None else len(v["time"])
+        v["normal_force"] = _read_normal_force(r, cls.field("normal_force"), n)
+        if r.has("tangential_force") and not r.has("fretting"):
+            tf = r.value(cls.field("tangential_force"))
+            if tf is not None and n is not None and len(tf) != n:
+                r.add(f"{r.key('tangential_force')} has {len(tf)} values but load.time has "
+                      f"{n} knots: give one value per knot")
+                tf = None
+            v["tangential_force"] = tf
+        return cls.make(**v) if r.ok else None
+
+    @property
+    def step_load(self) -> bool:
+        """True when the normal force is a scalar step at time[0]."""
+        return not isinstance(self.normal_force, tuple)
+
+    def knots(self):
+        """The program at its knots: (time [s], W [N], T1 [N], T2 [N]) float arrays."""
+        if self.fretting is not None:
+            t, T = self.fretting.knots()
+            c, s = self.fretting.unit_vector()
+            T1, T2 = T * c, T * s
+        else:
+            t = np.array(self.time, dtype=float)
+            tf = self.tangential_force
+            if tf is None:
+                T1 = np.zeros_like(t)
+                T2 = np.zeros_like(t)
+            elif isinstance(tf[0], tuple):
+                T1 = np.array([p[0] for p in tf], dtype=float)
+                T2 = np.array([p[1] for p in tf], dtype=float)
+            else:
+                T1 = np.array(tf, dtype=float)
+                T2 = np.zeros_like(t)
+        if self.step_load:
+            W = np.full(t.shape, self.normal_force, dtype=float)
+        else:
+            W = np.array(self.normal_force, dtype=float)
+        return t, W, T1, T2
+
+    def instants(self, steps: int):
+        """The program on the uniform mesh of ``steps`` + 1 instants from time[0] to
+        time[-1], interpolated linearly between knots: (t [s], W [N], T1 [N], T2 [N])."""
+        t, W, T1, T2 = self.knots()
+        tm = np.linspace(t[0], t[-1], int(steps) + 1)
+        return tm, np.interp(tm, t, W), np.interp(tm, t, T1), np.interp(tm, t, T2)
+
+    @property
+    def window(self) -> float:
+        """Duration of the program, time[-1] - time[0] [s]."""
+        t = self.knots()[0]
+        return float(t[-1] - t[0])
+
+    def default_steps(self):
+        """The default number of time steps: the least whose uniform mesh holds every
+        knot (:func:`knot_steps`; 1 + 4 n for a fretting preset of n cycles, one per
+        interval for equally spaced knots), or None when that needs more than
+        :data:`MAX_STEPS` steps."""
+        return knot_steps(self.knots()[0], MAX_STEPS)
+
+
+def _read_normal_force(r: Reader, f: Field, n):
+    """The normal force: a scalar step, or one value per knot (``n`` knots, if known)."""
+    v = r.raw.get(f.name)
+    key = r.key(f.name)
+    if is_sequence(v) and r.has("fretting"):
+        r.add(f"{key} must be a scalar (a step at t = 0) with {r.path}.fretting, got {show(v)}")
+        return None
+    normal = r.value(f, need="")
+    if normal is None:
+        return None
+    if not isinstance(normal, tuple):
+        if normal == 0:
+            r.add(f"{key} = {show(v)}: zero normal force leaves nothing in contact; give a "
+                  f"force > 0 [N]")
+            return None
+        return normal
+    if n is not None and len(normal) != n:
+        r.add(f"{key} has {len(normal)} values but load.time has {n} knots: give one value "
+              f"per knot, or a scalar (a step at time[0])")
+        return None
+    if not any(x > 0 for x in normal):
+        r.add(f"{key} is zero at every knot, got {show(v)}: nothing is in contact; give a "
+              f"force > 0 [N]")
+        return None
+    return normal
+
+
+# ----------------------------------------------------------------------------- grid, time
+
+@dataclass(frozen=True)
+class Grid(Part):
+    """The computational grid on the common plane, centred on the first contact point.
+
+    Parameters
+    ----------
+    points : (int, int)
+        Cells (N1, N2) along x1, x2, each from 8 to 4096.
+    size : (float, float) or "auto"
+        Full side lengths (L1, L2) [m], or "auto" for a Hertz estimate
+        (:meth:`Scene.resolved_grid_size`).
+    """
+
+    points: tuple
+    size: tuple | str
+
+    PATH = "grid"
+    FIELDS = (
+        Field("points", "integers", f"two integers [N1, N2], each from {MIN_POINTS} to "
+                                    f"{MAX_POINTS}",
+              ok=lambda n: MIN_POINTS <= n <= MAX_POINTS, length=2, required=True),
+        Field("size", "numbers", "two finite numbers > 0 [m], [L1, L2] the full side "
+                                 "lengths, or 'auto'",
+              ok=_positive, length=2, options=("auto",), required=True, unit="m"),
+    )
+
+    def _size(self):
+        if self.size == "auto":
+            raise SceneError("grid.size is 'auto': the grid alone cannot size itself; use "
+                             "Scene.resolved_grid() or give grid.size = [L1, L2] in m")
+        return self.size
+
+    def spacing(self):
+        """Cell sizes (d1, d2) = (L1/N1, L2/N2) [m]."""
+        L1, L2 = self._size()
+        return L1 / self.points[0], L2 / self.points[1]
+
+    def coordinates(self):
+        """Cell centres (x1 (N1,), x2 (N2,)) [m]: x = -L/2 + (i + 1/2) L/N, ascending.
+
+        The one implementation of the grid's coordinates (CONTRACT §2)."""
+        return tuple(-L / 2 + (np.arange(N) + 0.5) * (L / N)
+                     for N, L in zip(self.points, self._size()))
+
+
+@dataclass(frozen=True)
+class TimeMesh(Part):
+    """The uniform temporal mesh: ``steps`` + 1 instants from time[0] to time[-1].
+
+    Parameters
+    ----------
+    steps : int, optional
+        Number of steps, from 1 to 1 000 000. Absent: the least number whose mesh holds
+        every load knot (:meth:`Load.default_steps`; a scene stores the resolved number;
+        0 for a single-knot load, a single instant).
+    """
+
+    steps: int | None = None
+
+    PATH = "time"
+    FIELDS = (Field("steps", "integer", "an integer >= 1 (0 only for a single-knot load)",
+                    ok=lambda n: n >= 0, cap=MAX_STEPS,
+                    cap_why="each step is a full contact solve; split a longer program "
+                            "into several scenes"),)
+
+
+# ----------------------------------------------------------------------------- solver, output
+
+_AT_LEAST_1 = "an integer >= 1"
+
+
+@dataclass(frozen=True)
+class Solver(Part):
+    """Solver options.
+
+    Parameters
+    ----------
+    tolerance : float
+        Relative tolerance on the force balance and complementarity, in (0, 1e-2].
+    max_iterations : int
+        Iteration cap of each inner solve, >= 1.
+    time_rule : {"linear", "step_start"}
+        Traction within a time step in the viscoelastic history: linear (second order)
+        or applied at the step start (the paper's rectangle rule; not for phi(0) = 0).
+    tangential : {"auto", "scalar", "vector"}
+        Tangential model: chosen from the scene, q2 = 0 (Cattaneo-Mindlin), or both.
+    max_coupling_passes : int
+        Cap on the normal <-> tangential passes of the middle loop, >= 1.
+    preload_substeps : int
+        Substeps of the normal preload, from 1 to 10 000.
+    fft : {"auto", "pyfftw", "scipy"}
+    threads : int
+        FFT threads, from 1 to 1024.
+    accuracy : {None, "fast", "balanced", "accurate"}
+        Ask for an accuracy preset: the grid points and time steps are then chosen by
+        :func:`contactpipe.accuracy.resolve_accuracy` (replacing ``grid.points`` and
+        ``time.steps``) and the choice is recorded in the archive.
+    """
+
+    tolerance: float = 1e-9
+    max_iterations: int = 2000
+    time_rule: str = "linear"
+    tangential: str = "auto"
+    max_coupling_passes: int = 100
+    preload_substeps: int = 8
+    fft: str = "auto"
+    threads: int = 1
+    accuracy: str | None = None
+
+    PATH = "solver"
+    FIELDS = (
+        Field("tolerance", "number", f"a number in (0, {MAX_TOLERANCE:g}]",
+              ok=lambda x: 0 < x <= MAX_TOLERANCE, default=1e-9, unit="1"),
+        Field("max_iterations", "integer", _AT_LEAST_1, ok=_at_least_1, default=2000),
+        Field("time_rule", "choice", options=TIME_RULES, default="linear"),
+        Field("tangential", "choice", options=TANGENTIAL_MODELS, default="auto"),
+        Field("max_coupling_passes", "integer", _AT_LEAST_1, ok=_at_least_1, default=100),
+        Field("preload_substeps", "integer", _AT_LEAST_1, ok=_at_least_1, default=8,
+              cap=MAX_PRELOAD_SUBSTEPS,
+              cap_why="the preload needs a few substeps; the default is 8"),
+        Field("fft", "choice", options=FFT_BACKENDS, default="auto"),
+        Field("threads", "integer", _AT_LEAST_1, ok=_at_least_1, default=1,
+              cap=MAX_THREADS, cap_why="FFT threads beyond the cores only slow it down"),
+        Field("accuracy", "choice", options=ACCURACIES),
+    )
+
+
+@dataclass(frozen=True)
+class Output(Part):
+    """Archive options (they change the file, not the physics; not in the digest).
+
+    Parameters
+    ----------
+    stride : int
+        Store every ``stride``-th instant, from 1 to 1 000 000.
+    precision : {"float64", "float32"}
+        Storage type of the fields.
+    compress : bool
+        zlib compression of the archive.
+    """
+
+    stride: int = 1
+    precision: str = "float64"
+    compress: bool = True
+
+    PATH = "output"
+    FIELDS = (
+        Field("stride", "integer", _AT_LEAST_1, ok=_at_least_1, default=1, cap=MAX_STEPS,
+              cap_why="the largest number of time steps"),
+        Field("precision", "choice", options=PRECISIONS, default="float64"),
+        Field("compress", "bool", default=True),
+    )
