@@ -23,7 +23,7 @@ __all__ = ["main", "build_parser"]
 STAGES = {
     # name: (module, one-line help)
     "sweep": ("contactpipe.pipeline.sweep", "run a parameter sweep on dask (resumable)"),
-    "compare": ("contactpipe.pipeline.compare", "compare archives with closed forms or each other"),
+    "compare": ("contactpipe.pipeline.compare_cli", "compare archives with closed forms or each other"),
     "plot": ("contactpipe.pipeline.plot", "standard figures of an archive or a sweep"),
     "pipeline": ("contactpipe.pipeline.run", "sweep -> compare -> plot, idempotent, cron-safe"),
     "bench": ("contactpipe.pipeline.bench", "print solver speed figures (FFT pairs, iterations, time)"),
