@@ -288,7 +288,7 @@ def check_output_dir(path, what: str = "output folder", inputs=()) -> pathlib.Pa
     while True:
         try:
             st = os.stat(probe)
-        except FileNotFoundError:
+        except (FileNotFoundError, NotADirectoryError):   # a file on the way: found above
             if probe.parent == probe:
                 return path
             probe = probe.parent
