@@ -176,3 +176,41 @@ def test_cli_plot_errors(archives, tmp_path, capsys):
     status = cli_main(["plot", creep, "-o", str(tmp_path / "h.png"), "--kind", "hysteresis"])
     err = capsys.readouterr().err
     assert status != 0 and "frictionless" in err and len(err.strip().splitlines()) == 1
+
+
+def test_plot_functions_return_the_figure_and_write_nothing(archives, tmp_path,
+                                                            monkeypatch):
+    """Each function draws into the axes or figure it is given and returns the Figure;
+    only save_figure writes."""
+    from matplotlib.figure import Figure
+    monkeypatch.chdir(tmp_path)
+    ds = archives["md"]
+    for fig in (plot.plot_profiles(ds), plot.plot_maps(ds), plot.plot_hysteresis(ds),
+                plot.plot_radii(ds)):
+        assert isinstance(fig, Figure) and fig.axes
+    outer = Figure(figsize=plot.FIGSIZE, dpi=plot.DPI)
+    left, right = outer.subplots(1, 2)
+    assert plot.plot_hysteresis(ds, ax=left) is outer
+    assert plot.plot_radii(ds, ax=right) is outer
+    assert len(outer.axes) == 2 and left.lines and right.lines
+    given = Figure()
+    assert plot.plot_profiles(ds, fig=given) is given and len(given.axes) == 2  # p and q1
+    assert plot.plot_maps(ds, fig=Figure()).axes
+    assert list(tmp_path.iterdir()) == []
+    check_png(plot.save_figure(plot.plot_radii(archives["folder"] / "md.nc"),
+                               tmp_path / "sub" / "r.png"))
+
+
+def test_profiles_against_a_reference_archive(archives, tmp_path):
+    fig = plot.plot_profiles(archives["md"], reference=archives["folder"] / "md.nc")
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "reference archive" in labels
+    check_png(plot.save_figure(fig, tmp_path / "ref.png"))
+
+
+def test_standard_figures_refuse_a_file_as_folder(archives, tmp_path):
+    from contactpipe.exceptions import OutputPathError
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(OutputPathError, match="is a file, not a folder"):
+        plot.standard_figures(archives["creep"], tmp_path / "f")
+    assert (tmp_path / "f").read_text() == "x"
