@@ -23,22 +23,23 @@ import os
 import sys
 import tempfile
 import time
+
+import distributed
+
+from contactpipe.pipeline.sweep import sweep
+from contactpipe.scene import Scene
 from contactpipe.testing import TINY_SCENES
 
 FRETTING = TINY_SCENES["fretting"]
 
 
 def _warm():
-    import contactpipe.simulation  # noqa: F401 - imports numpy, pyfftw, netCDF4 on the worker
+    # the import is the point: run on each worker, it loads numpy, pyfftw, netCDF4 there
+    import contactpipe.simulation  # noqa: F401
     return os.getpid()
 
 
 def run(steps: int, members: int, workers: list[int]) -> int:
-    import distributed
-
-    from contactpipe.scene import Scene
-    from contactpipe.pipeline.sweep import sweep
-
     base = Scene.from_toml_text(FRETTING).replace({"time.steps": steps})
     axes = {"friction.mu": [round(0.10 + 0.01 * i, 4) for i in range(members)]}
     print(f"sweep of {members} members: tiny-fretting 24x24, {steps} steps, "

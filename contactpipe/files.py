@@ -12,7 +12,8 @@ Every writer and reader of contactpipe goes through these, so the policy is stat
 * :func:`read_toml` / :func:`loads_toml` - TOML as a dict (``tomllib``, or ``tomli`` on
   Python 3.10), with an error naming the file.
 * :func:`check_output_path` - refuse, before any work, an output path that is empty, a
-  directory, a device or other special file, or one of the inputs.
+  directory, a device or other special file, or one of the inputs;
+  :func:`check_output_dir` the same for an output folder.
 """
 from __future__ import annotations
 
@@ -33,7 +34,8 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 from .exceptions import ContactpipeError, OutputPathError, SceneError
 
 __all__ = ["atomic_path", "write_text", "write_json", "exclusive_lock", "LockedError",
-           "read_toml", "loads_toml", "TOMLDecodeError", "check_output_path", "temp_name",
+           "read_toml", "loads_toml", "TOMLDecodeError", "check_output_path",
+           "check_output_dir", "temp_name",
            "temporaries", "publish", "utc_now"]
 
 TOMLDecodeError = tomllib.TOMLDecodeError
@@ -274,3 +276,43 @@ def check_output_path(path, what: str = "output", inputs=()) -> pathlib.Path:
         raise OutputPathError(f"{what} {path}: its folder {parent} is a file, not a "
                               f"directory")
     return path
+
+
+def check_output_dir(path, what: str = "output folder", inputs=()) -> pathlib.Path:
+    """Refuse an output folder before any work is done; return it as a Path.
+
+    Refused: an empty path; anything that exists and is not a directory (a file, one of
+    ``inputs``, a device such as ``/dev/null``, a FIFO, a socket); a folder to be created
+    under an existing path that is not a directory. A missing folder is fine (the writer
+    creates it).
+
+    Raises
+    ------
+    OutputPathError
+        One line naming the path, the problem and what is allowed.
+    """
+    if path is None or not os.fspath(path):
+        raise OutputPathError(f"{what} path is empty: give a folder name such as runs/")
+    path = pathlib.Path(os.fspath(path)).expanduser()
+    probe = path
+    while True:
+        try:
+            st = os.stat(probe)
+        except (FileNotFoundError, NotADirectoryError):   # a file on the way: found above
+            if probe.parent == probe:
+                return path
+            probe = probe.parent
+            continue
+        except OSError as err:
+            raise OutputPathError(f"{what} {path}: cannot be checked "
+                                  f"({err.strerror})") from None
+        break
+    if stat.S_ISDIR(st.st_mode):
+        return path
+    is_input = any(inp is not None and os.path.exists(inp) and os.path.samefile(probe, inp)
+                   for inp in inputs)
+    kind = ("the input file" if is_input else "a file" if stat.S_ISREG(st.st_mode)
+            else "a device, FIFO or socket")
+    where = f"{path} is" if probe == path else f"{path}: its parent {probe} is"
+    raise OutputPathError(f"{what} {where} {kind}, not a folder: give the path of a "
+                          f"folder (existing or to be created)")

@@ -9,7 +9,8 @@ import xarray as xr
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.pipeline.cli import main as cli_main
-from contactpipe.pipeline.compare import _iwan_dissipation, closed_form_for, compare
+from contactpipe.pipeline.compare import compare
+from contactpipe.pipeline.reference import closed_form_for, iwan_dissipation
 from contactpipe.exceptions import ArchiveError, SceneError
 
 from conftest import A_HERTZ, W, fretting_scene, make_scene
@@ -107,7 +108,7 @@ def test_iwan_dissipation_matches_johnson_energy_per_cycle():
     hist = np.concatenate([np.linspace(0, Ts, 5), np.linspace(Ts, -Ts, 9)[1:],
                            np.linspace(-Ts, Ts, 9)[1:]])
     omega = an.tangential_displacement(hist, mu, W, a, C, all_instants=True)
-    D = _iwan_dissipation(omega, mu * W, 3 * mu * W * C / (16 * a))
+    D = iwan_dissipation(omega, mu * W, 3 * mu * W * C / (16 * a))
     cycle = D[-1] - D[4]              # the state at the end equals that at the first peak
     assert cycle == pytest.approx(an.energy_per_cycle(Ts, mu, W, a, C), rel=1e-6)
 

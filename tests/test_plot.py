@@ -48,6 +48,11 @@ def archives(tmp_path_factory):
     }
 
 
+def draw(plot_function, obj, path, *args, **kwargs):
+    """Draw with a plot function (it returns the Figure), then save it as the CLI does."""
+    return plot.save_figure(plot_function(obj, *args, **kwargs), path)
+
+
 def check_png(path):
     assert path.exists() and path.stat().st_size > 5_000, path
     image = imread(path)
@@ -57,17 +62,17 @@ def check_png(path):
 
 @pytest.mark.parametrize("kind", ["md", "fretting", "creep"])
 def test_profiles(archives, tmp_path, kind):
-    path = plot.plot_profiles(archives[kind], tmp_path / "p.png")
+    path = draw(plot.plot_profiles, archives[kind], tmp_path / "p.png")
     assert path == tmp_path / "p.png"
     check_png(path)
 
 
 def test_profiles_instants(archives, tmp_path):
     ds = archives["md"]
-    check_png(plot.plot_profiles(ds, tmp_path / "a.png", instants=[4, -1]))
-    check_png(plot.plot_profiles(ds, tmp_path / "b.png", instants=[0.6], closed_form=False))
+    check_png(draw(plot.plot_profiles, ds, tmp_path / "a.png", instants=[4, -1]))
+    check_png(draw(plot.plot_profiles, ds, tmp_path / "b.png", instants=[0.6], closed_form=False))
     with pytest.raises(ValueError, match="out of range"):
-        plot.plot_profiles(ds, tmp_path / "c.png", instants=[99])
+        draw(plot.plot_profiles, ds, tmp_path / "c.png", instants=[99])
 
 
 def test_default_instants_include_turning_points(archives):
@@ -84,26 +89,26 @@ def test_centre_rows():
 
 @pytest.mark.parametrize("kind", ["fretting", "creep"])
 def test_maps(archives, tmp_path, kind):
-    check_png(plot.plot_maps(archives[kind], tmp_path / "m.png"))
+    check_png(draw(plot.plot_maps, archives[kind], tmp_path / "m.png"))
 
 
 def test_maps_instant(archives, tmp_path):
-    check_png(plot.plot_maps(archives["md"], tmp_path / "m.png", instant=3))
+    check_png(draw(plot.plot_maps, archives["md"], tmp_path / "m.png", instant=3))
     with pytest.raises(ValueError, match="out of range"):
-        plot.plot_maps(archives["md"], tmp_path / "x.png", instant=-50)
+        draw(plot.plot_maps, archives["md"], tmp_path / "x.png", instant=-50)
 
 
 def test_hysteresis(archives, tmp_path):
-    check_png(plot.plot_hysteresis(archives["md"], tmp_path / "h.png"))
-    check_png(plot.plot_hysteresis(archives["folder"] / "fretting.nc", tmp_path / "v.png"))
+    check_png(draw(plot.plot_hysteresis, archives["md"], tmp_path / "h.png"))
+    check_png(draw(plot.plot_hysteresis, archives["folder"] / "fretting.nc", tmp_path / "v.png"))
     with pytest.raises(ArchiveError, match="frictionless"):
-        plot.plot_hysteresis(archives["creep"], tmp_path / "no.png")
+        draw(plot.plot_hysteresis, archives["creep"], tmp_path / "no.png")
     assert not (tmp_path / "no.png").exists()
 
 
 @pytest.mark.parametrize("kind", ["md", "creep"])
 def test_radii(archives, tmp_path, kind):
-    check_png(plot.plot_radii(archives[kind], tmp_path / "r.png"))
+    check_png(draw(plot.plot_radii, archives[kind], tmp_path / "r.png"))
 
 
 def test_standard_figures(archives, tmp_path):
@@ -123,12 +128,12 @@ def test_sweep_along_mu(tmp_path):
                for mu in (0.1, 0.12, 0.15)]
     sw = xr.concat(members, dim=xr.DataArray([0.1, 0.12, 0.15], dims="mu", name="mu"),
                    combine_attrs="drop_conflicts")
-    check_png(plot.plot_sweep(sw, tmp_path / "s.png"))
+    check_png(draw(plot.plot_sweep, sw, tmp_path / "s.png"))
     assert plot._member_label(sw, {"mu": 1}) == "mu = 0.12"
-    check_png(plot.plot_sweep(sw, tmp_path / "d.png", variable="dissipation"))
-    check_png(plot.plot_sweep(sw, tmp_path / "p.png", variable="p"))     # max over x1, x2
+    check_png(draw(plot.plot_sweep, sw, tmp_path / "d.png", variable="dissipation"))
+    check_png(draw(plot.plot_sweep, sw, tmp_path / "p.png", variable="p"))     # max over x1, x2
     with pytest.raises(ArchiveError, match="not in the sweep"):
-        plot.plot_sweep(sw, tmp_path / "x.png", variable="nope")
+        draw(plot.plot_sweep, sw, tmp_path / "x.png", variable="nope")
 
 
 def test_sweep_on_t_norm(archives, tmp_path):
@@ -142,13 +147,13 @@ def test_sweep_on_t_norm(archives, tmp_path):
     sw = xr.concat(members, dim=xr.DataArray([1.0, 2.0], dims="tau_ratio"),
                    combine_attrs="drop_conflicts")
     assert sw["time"].ndim == 2
-    check_png(plot.plot_sweep(sw, tmp_path / "t.png"))
+    check_png(draw(plot.plot_sweep, sw, tmp_path / "t.png"))
     # a zip sweep: one dimension "member", the axes as coordinates along it
     zipped = sw.rename(tau_ratio="member").drop_vars("member").assign_coords(
         tau_ratio=("member", [1.0, 2.0]), mu=("member", [0.0, 0.1]))
     label = plot._member_label(zipped, {"member": 1})
     assert sorted(label.split(", ")) == ["mu = 0.1", "tau_ratio = 2"]
-    check_png(plot.plot_sweep(zipped, tmp_path / "z.png", variable="W"))
+    check_png(draw(plot.plot_sweep, zipped, tmp_path / "z.png", variable="W"))
 
 
 def test_cli_plot(archives, tmp_path, capsys):
@@ -171,3 +176,41 @@ def test_cli_plot_errors(archives, tmp_path, capsys):
     status = cli_main(["plot", creep, "-o", str(tmp_path / "h.png"), "--kind", "hysteresis"])
     err = capsys.readouterr().err
     assert status != 0 and "frictionless" in err and len(err.strip().splitlines()) == 1
+
+
+def test_plot_functions_return_the_figure_and_write_nothing(archives, tmp_path,
+                                                            monkeypatch):
+    """Each function draws into the axes or figure it is given and returns the Figure;
+    only save_figure writes."""
+    from matplotlib.figure import Figure
+    monkeypatch.chdir(tmp_path)
+    ds = archives["md"]
+    for fig in (plot.plot_profiles(ds), plot.plot_maps(ds), plot.plot_hysteresis(ds),
+                plot.plot_radii(ds)):
+        assert isinstance(fig, Figure) and fig.axes
+    outer = Figure(figsize=plot.FIGSIZE, dpi=plot.DPI)
+    left, right = outer.subplots(1, 2)
+    assert plot.plot_hysteresis(ds, ax=left) is outer
+    assert plot.plot_radii(ds, ax=right) is outer
+    assert len(outer.axes) == 2 and left.lines and right.lines
+    given = Figure()
+    assert plot.plot_profiles(ds, fig=given) is given and len(given.axes) == 2  # p and q1
+    assert plot.plot_maps(ds, fig=Figure()).axes
+    assert list(tmp_path.iterdir()) == []
+    check_png(plot.save_figure(plot.plot_radii(archives["folder"] / "md.nc"),
+                               tmp_path / "sub" / "r.png"))
+
+
+def test_profiles_against_a_reference_archive(archives, tmp_path):
+    fig = plot.plot_profiles(archives["md"], reference=archives["folder"] / "md.nc")
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "reference archive" in labels
+    check_png(plot.save_figure(fig, tmp_path / "ref.png"))
+
+
+def test_standard_figures_refuse_a_file_as_folder(archives, tmp_path):
+    from contactpipe.exceptions import OutputPathError
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(OutputPathError, match="is a file, not a folder"):
+        plot.standard_figures(archives["creep"], tmp_path / "f")
+    assert (tmp_path / "f").read_text() == "x"

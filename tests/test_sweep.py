@@ -25,6 +25,7 @@ from contactpipe.testing import TINY_SCENES
 
 # the module (``contactpipe.pipeline.sweep`` the attribute is the function, CONTRACT §1)
 sweep_mod = importlib.import_module("contactpipe.pipeline.sweep")
+parameters_mod = importlib.import_module("contactpipe.pipeline.parameters")
 
 # the 24 x 24 scenes of shared/examples, as contactpipe.testing carries them
 FRETTING = TINY_SCENES["fretting"]
@@ -60,10 +61,10 @@ def creep():
 @pytest.fixture
 def registry():
     """Restore the derived-parameter registry after a test registers one."""
-    saved = dict(sweep_mod._PARAMETERS)
+    saved = dict(parameters_mod._PARAMETERS)
     yield
-    sweep_mod._PARAMETERS.clear()
-    sweep_mod._PARAMETERS.update(saved)
+    parameters_mod._PARAMETERS.clear()
+    parameters_mod._PARAMETERS.update(saved)
 
 
 def stamps(folder):

@@ -1,4 +1,23 @@
 """The pipeline stages: sweeps on dask, comparison, figures, batch runs and the command line.
 
-They read and write archives (:mod:`contactpipe.archive`) and never reach into the solver.
+They read and write archives (:mod:`contactpipe.archive`); only the speed figures
+(:mod:`~contactpipe.pipeline.bench`) reach into the solver. Modules, from the top down
+(imports flow down only: pyproject's import-linter contract keeps it so):
+
+``cli``          the ``contactpipe`` command: one sub-command per stage module below
+``run``          the batch pipeline (sweep -> compare -> plot, idempotent, cron-safe)
+``sweep``        :func:`sweep` (resuming included) and ``contactpipe sweep``;
+                 re-exports the sweep stage's public names
+``compare_cli``  ``contactpipe compare`` (the table from compare, the figure from plot)
+``bench``        ``contactpipe bench``: speed figures
+``plot``         figures: functions take ``ax=``/``fig=`` and return the Figure;
+                 :func:`~contactpipe.pipeline.plot.save_figure` writes them
+``compare``      error tables against a closed form or a reference archive
+``combine``      :func:`open_sweep`: a sweep folder as one Dataset
+``execute``      where the members run, and who writes their archives
+``reference``    the closed forms a scene admits (:class:`ClosedForm`, ...)
+``manifest``     a sweep folder's ``manifest.json``, written and validated
+``members``      a sweep's axes parsed into members, each a validated scene
+``parameters``   derived sweep parameters (``tau_ratio``, :func:`register_parameter`)
+``inputs``       what the stages read from an archive: grid, scene, radii
 """

@@ -26,6 +26,11 @@ import time
 
 import numpy as np
 
+from ..exceptions import SceneError
+from ..scene import Scene
+from ..simulation import simulate
+from ..solver.convolution import Convolver
+
 __all__ = ["add_arguments", "main", "CASES"]
 
 E_STEEL, NU, R, W, MU = 210e9, 0.3, 0.018, 1000.0, 0.1
@@ -35,7 +40,6 @@ ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 
 
 def _scene(**kw):
-    from ..scene import Scene
     d = {"name": "bench", "geometry": {"shape": "sphere", "radius": R},
          "indenter": dict(STEEL), "halfspace": dict(STEEL)}
     d.update(kw)
@@ -44,7 +48,6 @@ def _scene(**kw):
 
 def _floor_ms(n, backend, threads):
     """Milliseconds of one forward + inverse real FFT of the padded n x n grid."""
-    from ..solver.convolution import Convolver
     conv = Convolver(n, n, backend=backend, threads=threads)
     k = conv.kernel_spectrum(np.ones((2 * n, 2 * n)))
     x = np.random.default_rng(0).normal(size=(n, n))
@@ -57,7 +60,6 @@ def _floor_ms(n, backend, threads):
 
 
 def bench_normal(grids, backend, threads):
-    from ..simulation import simulate
     print("normal contact: Hertz, steel on steel, W = 1 kN, R = 18 mm, grid over 4a, tol 1e-10")
     print(f"{'grid':>9} {'iter':>5} {'pairs':>6} {'pairs/it':>8} {'wall ms':>8} "
           f"{'floor ms':>9} {'pairs*floor':>11} {'plan s':>7}")
@@ -79,7 +81,6 @@ def bench_normal(grids, backend, threads):
 
 
 def bench_fretting(grids, backend, threads, steps=40):
-    from ..simulation import simulate
     print(f"fretting loop T: 0 -> .9μW -> -.9μW -> .9μW, μ = 0.1, {steps} steps, grid over 3a, "
           "tol 1e-9; per step after the first (warm-started)")
     print(f"{'pair':>16} {'form':>7} {'grid':>9} {'iter/step':>9} {'pairs/step':>10} "
@@ -108,7 +109,6 @@ def bench_fretting(grids, backend, threads, steps=40):
 
 
 def bench_memory(backend, threads):
-    from ..simulation import simulate
     print("memory: per-step cost of the viscoelastic history (64², rigid sphere, W stepped, "
           "window 2 s); the recursion keeps it flat")
     print(f"{'creep':>8} {'ms/step (steps 0-10)':>21} {'ms/step (steps 990-1000)':>25}")
@@ -128,7 +128,6 @@ def bench_memory(backend, threads):
 
 
 def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
-    from ..simulation import simulate
     Ts = 0.9 * MU * W
     print(f"paper figure 3: rigid sphere on Maxwell (glassy E = 105 GPa, ν = 0.3: the steel "
           f"pair's composite modulus; coupling on), τ = t', {n}², {steps} steps, end to end")
@@ -150,7 +149,6 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
 
 
 def bench_long_run(backend, threads, n=256, steps=2000):
-    from ..simulation import simulate
     sc = _scene(indenter={"material": "rigid"},
                 halfspace={"material": "viscoelastic", "young": E_STEEL, "poisson": 0.5,
                            "creep": "maxwell", "relaxation_time": 1.0},
@@ -183,7 +181,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args) -> int:
-    from ..exceptions import SceneError
     for case in args.cases:
         if case not in CASES:
             raise SceneError(f"bench case {case!r}: allowed {', '.join(CASES)}")

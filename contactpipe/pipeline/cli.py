@@ -23,7 +23,7 @@ __all__ = ["main", "build_parser"]
 STAGES = {
     # name: (module, one-line help)
     "sweep": ("contactpipe.pipeline.sweep", "run a parameter sweep on dask (resumable)"),
-    "compare": ("contactpipe.pipeline.compare", "compare archives with closed forms or each other"),
+    "compare": ("contactpipe.pipeline.compare_cli", "compare archives with closed forms or each other"),
     "plot": ("contactpipe.pipeline.plot", "standard figures of an archive or a sweep"),
     "pipeline": ("contactpipe.pipeline.run", "sweep -> compare -> plot, idempotent, cron-safe"),
     "bench": ("contactpipe.pipeline.bench", "print solver speed figures (FFT pairs, iterations, time)"),
@@ -60,9 +60,9 @@ def _run(args) -> int:
     print(f"wrote {args.output} ({ds.sizes['time']} instants, {ds.attrs['models']}, "
           f"{float(ds.attrs['wall_time_s']):.2f} s)")
     if args.figure is not None:
-        from .plot import plot_profiles
+        from .plot import plot_profiles, save_figure
         args.figure.parent.mkdir(parents=True, exist_ok=True)
-        plot_profiles(ds, args.figure)
+        save_figure(plot_profiles(ds), args.figure)
         print(f"wrote {args.figure}")
     return 0
 

@@ -45,6 +45,7 @@ from ..files import read_toml
 from ..nomenclature import SERIES, VARIABLES
 from ..scene import Scene
 from ..tables import Field, Reader, did_you_mean, nesting_depth, show
+from .members import MODES
 
 __all__ = ["SweepFile", "PipelineSpec", "read_sweep_file", "load_sweep_file",
            "read_sweep_table", "read_dask_table", "read_pipeline_file", "flatten_axes",
@@ -52,7 +53,6 @@ __all__ = ["SweepFile", "PipelineSpec", "read_sweep_file", "load_sweep_file",
            "SWEEP_FIELDS", "DASK_FIELDS", "PIPELINE_FIELDS", "COMPARE_FIELDS",
            "PLOT_FIELDS", "MAX_AXIS_DEPTH"]
 
-MODES = ("product", "zip")
 CLOSED_FORM = "closed_form"
 MEMBER_FIGURES = ("profiles", "hysteresis", "radii", "maps")
 FIGURES = MEMBER_FIGURES + ("sweep",)

@@ -1,37 +1,53 @@
-"""Standard figures of an archive or a sweep (PNG, matplotlib's Agg renderer).
+"""Standard figures of an archive or a sweep (matplotlib, never pyplot).
 
-``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|all``.
+``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|all``;
+``contactpipe plot SWEEP_DIR/ -o FIG.png [--variable NAME]`` for a sweep folder.
 
 - :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
-  instants, the closed form in grey (as the paper's figures 2 and 3); pH, aH are the
-  Hertz peak pressure and contact radius of the scene with its instantaneous moduli.
+  instants, the closed form (or a reference archive) in grey (as the paper's figures 2
+  and 3); pH, aH are the Hertz peak pressure and contact radius of the scene with its
+  instantaneous moduli.
 - :func:`plot_maps`: p, |q| and the stick/slip status at one instant, axes in mm.
 - :func:`plot_hysteresis`: the fretting loop T1 against omega1.
 - :func:`plot_radii`: contact and stick radii against time.
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
-- :func:`standard_figures`: every figure that applies to an archive.
+- :func:`standard_figures`: every figure that applies to an archive, written to a folder.
 
-Figures are made with :class:`matplotlib.figure.Figure` (never pyplot: no global state,
-no window), 8 x 5 in at 100 dpi (800 x 500 pixels), tight layout, and written atomically
-(a temporary file renamed onto the target). Every function returns the path written.
+Every plotting function draws into the axes it is given (``ax=``, or ``fig=`` for the
+figures with several axes) or into a new :class:`matplotlib.figure.Figure` (8 x 5 in at
+100 dpi, tight layout; never pyplot: no global state, no window), and returns the
+Figure, so a notebook shows it and a script saves it. :func:`save_figure` is the one
+place a figure is written: a PNG of 800 x 500 pixels, written atomically (a temporary
+file renamed onto the target) after the path is checked.
+
+    >>> fig = plot_profiles("run.nc")
+    >>> save_figure(fig, "profiles.png")
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import itertools
 import math
 import pathlib
+import warnings
 
 import numpy as np
 import xarray as xr
 
-from .compare import (ClosedForm, _grid, _radius, _scene_of, closed_form_for,
-                      closed_form_solution, load_dataset)
+from .. import analytic
 from ..exceptions import ArchiveError, ContactpipeError
-from ..files import atomic_path
+from ..files import atomic_path, check_output_dir, check_output_path
+from ..materials import composite_modulus
+from ..nomenclature import VARIABLES
+from .combine import MANIFEST, open_sweep
+from .compare import load_dataset
+from .inputs import grid_of, radius_of_area, scene_of
+from .reference import ClosedForm, closed_form_for, closed_form_solution
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
-           "standard_figures", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS"]
+           "standard_figures", "save_figure", "new_figure", "has_tangential_load",
+           "figure_applies", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS"]
 
 FIGSIZE = (8.0, 5.0)        # in
 DPI = 100
@@ -41,46 +57,97 @@ GREY_WIDE = "0.78"          # a wide light line under the numerical one
 STATUS_COLOURS = ("#e6e6e6", "#2c7bb6", "#d7191c")     # separated, stick, slip
 
 
-# --------------------------------------------------------------------------- helpers
+# --------------------------------------------------------------------------- figures
 
-def _figure(nrows=1, ncols=1, **kw):
+def new_figure():
+    """A new 8 x 5 in Figure at 100 dpi with a tight layout (not attached to pyplot)."""
+    # matplotlib is imported here, not at the top: a heavy import that only drawing needs
+    # (the command line and the pipeline import this module whatever they run)
     from matplotlib.figure import Figure
-    fig = Figure(figsize=FIGSIZE, dpi=DPI)
-    axes = fig.subplots(nrows, ncols, squeeze=False, **kw)
-    return fig, axes
+    return Figure(figsize=FIGSIZE, dpi=DPI, layout="tight")
 
 
-def _save(fig, path) -> pathlib.Path:
-    """Tight layout, then write the PNG atomically."""
-    import warnings
-    path = pathlib.Path(path)
+def _axes(ax):
+    """(Figure, Axes): ``ax`` and its figure, or a new figure with one Axes."""
+    if ax is not None:
+        return ax.get_figure(), ax
+    fig = new_figure()
+    return fig, fig.add_subplot()
+
+
+def _grid_axes(fig, nrows, ncols, **kw):
+    """(Figure, 2-D array of Axes) drawn into ``fig`` (a new figure when None)."""
+    fig = new_figure() if fig is None else fig
+    return fig, fig.subplots(nrows, ncols, squeeze=False, **kw)
+
+
+def save_figure(fig, path) -> pathlib.Path:
+    """Write ``fig`` as a PNG (800 x 500 pixels for a figure of :func:`new_figure`).
+
+    The one place figures are written: the path is checked first
+    (:func:`contactpipe.files.check_output_path`: not empty, not a directory, not a
+    device), its folder is created, and the file is written atomically.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    OutputPathError
+        ``path`` cannot be written.
+    """
+    path = check_output_path(path, "figure")
+    check_output_dir(path.parent, "folder of the figure")
     path.parent.mkdir(parents=True, exist_ok=True)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)     # tight layout on odd axes
-        fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=DPI)
+        # the tight layout gives up (with a warning) on axes it cannot fit: drawn as is
+        warnings.filterwarnings("ignore", message=".*[Tt]ight.?layout", category=UserWarning)
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png", dpi=DPI)
     return path
 
+
+# --------------------------------------------------------------------------- helpers
 
 def _open(ds):
     ds, _ = load_dataset(ds)
     return ds
 
 
+@contextlib.contextmanager
+def _dataset(obj):
+    """The Dataset of ``obj`` (a Dataset or an archive path); closed after if opened here."""
+    ds = _open(obj)
+    try:
+        yield ds
+    finally:
+        if ds is not obj:
+            ds.close()
+
+
 def _frictional(ds) -> bool:
     return all(v in ds for v in ("q1", "T1", "omega1"))
 
 
-def _has_tangential_load(ds) -> bool:
+def has_tangential_load(ds) -> bool:
+    """True for a frictional archive (q1, T1, omega1) whose T1 is not all zero: the
+    archives whose fretting loop :func:`plot_hysteresis` draws."""
     return _frictional(ds) and bool(np.any(np.abs(np.asarray(ds["T1"].values)) > 0))
+
+
+def figure_applies(kind: str, ds) -> bool:
+    """Whether the figure ``kind`` (one of :data:`KINDS`) applies to an archive: the
+    fretting loop needs a tangential load, the others always apply."""
+    return has_tangential_load(ds) if kind == "hysteresis" else True
 
 
 def _window(ds):
     """(t0, tau) [s]: the start and length of the load window."""
     t = np.asarray(ds["time"].values, float)
     try:
-        scene = _scene_of(ds)
+        scene = scene_of(ds)
         tk = scene.load.knots()[0]
         t0, tau = float(tk[0]), float(tk[-1] - tk[0])
     except ArchiveError:
@@ -103,10 +170,8 @@ def _scales(ds):
     pressure W / (pi a^2) and the punch radius; a surface: the largest pressure and the
     radius of the largest contact area.
     """
-    from .. import analytic
-    from ..materials import composite_modulus
     try:
-        scene = _scene_of(ds)
+        scene = scene_of(ds)
     except ArchiveError:
         scene = None
     if scene is not None and scene.geometry.shape != "surface":
@@ -126,7 +191,7 @@ def _scales(ds):
             h = analytic.hertz_ellipsoid(W, geo.radii, e_star)
             return h.max_pressure, h.semi_axes[0], ("p_H", "a_H")
     pmax = float(ds["p"].max())
-    amax = _radius(float(ds["contact_area"].max()))
+    amax = radius_of_area(float(ds["contact_area"].max()))
     return (pmax if pmax > 0 else 1.0), (amax if amax > 0 else 1.0), ("p_max", "a_max")
 
 
@@ -202,120 +267,124 @@ def _solution(ds) -> ClosedForm | None:
 
 # --------------------------------------------------------------------------- profiles
 
-def _profiles_figure(ds, path, instants=None, *, closed_form=True, reference=None):
-    """The profiles figure; ``reference`` (a Dataset) is drawn in grey instead of the
-    closed form, at the instants nearest in t_norm."""
-    ds = _open(ds)
+def _instants(ds, instants) -> list:
     if instants is None:
-        ks = _default_instants(ds)
-    elif isinstance(instants, (int, np.integer, float, np.floating)):
-        ks = [_index(ds, instants)]
-    else:
-        ks = [_index(ds, i) for i in instants]
+        return _default_instants(ds)
+    if isinstance(instants, (int, np.integer, float, np.floating)):
+        return [_index(ds, instants)]
+    return [_index(ds, i) for i in instants]
+
+
+def _draw_closed_form(sol, k, xf, x2_row, scale, ax_p, ax_q):
+    """The closed-form profiles at instant k, in grey under the numerical ones."""
+    with np.errstate(all="ignore"):
+        if sol.has_field_pressure():
+            pc = sol.pressure(k, xf, x2_row) / scale[0]
+            pc = np.where(np.isfinite(pc), pc, np.nan)
+            ax_p.plot(xf / scale[1], pc, "-", color=GREY, lw=1.0, zorder=0)
+        if ax_q is not None:
+            ax_q.plot(xf / scale[1], sol.shear(k, xf, x2_row) / scale[0], "-", color=GREY,
+                      lw=1.0, zorder=0)
+
+
+def _draw_reference(ref, tn, scale, ax_p, ax_q):
+    """The reference archive's profiles at its instant nearest t_norm = tn, in grey."""
+    tr = np.asarray(ref["time"].values, float)
+    ref_t = (tr - tr[0]) / (tr[-1] - tr[0]) if tr[-1] > tr[0] else np.zeros_like(tr)
+    j = int(np.argmin(np.abs(ref_t - tn)))
+    rows = _centre_rows(ref["x2"].values)
+    xr1 = np.asarray(ref["x1"].values, float) / scale[1]
+    ax_p.plot(xr1, _profile(ref["p"], j, rows) / scale[0], "-", color=GREY, lw=1.0,
+              zorder=0)
+    if ax_q is not None and "q1" in ref:
+        ax_q.plot(xr1, _profile(ref["q1"], j, rows) / scale[0], "-", color=GREY, lw=1.0,
+                  zorder=0)
+
+
+def _profiles(ds, ks, sol, ref, fig):
+    """Draw the profiles of ``ds`` at the instants ``ks`` into ``fig`` (closed form
+    ``sol`` or reference Dataset ``ref`` in grey); returns the figure."""
     pH, aH, (pn, an) = _scales(ds)
-    x1, x2, _, _ = _grid(ds)
+    x1, x2, _, _ = grid_of(ds)
     rows = _centre_rows(x2)
     x2_row = float(np.mean(np.abs(x2[rows])))
     shear = "q1" in ds
-    fig, axes = _figure(2 if shear else 1, 1, sharex=True)
+    fig, axes = _grid_axes(fig, 2 if shear else 1, 1, sharex=True)
     ax_p = axes[0, 0]
     ax_q = axes[1, 0] if shear else None
-    sol = _solution(ds) if (closed_form and reference is None) else None
+    panels = (ax_p, ax_q) if shear else (ax_p,)
     xf = np.linspace(x1[0], x1[-1], 601)
-    colours = [f"C{i % 10}" for i in range(len(ks))]
-    ref_rows = ref_t = None
-    if reference is not None:
-        reference = _open(reference)
-        ref_rows = _centre_rows(reference["x2"].values)
-        tr = np.asarray(reference["time"].values, float)
-        ref_t = (tr - tr[0]) / (tr[-1] - tr[0]) if tr[-1] > tr[0] else np.zeros_like(tr)
     t_all = np.asarray(ds["time"].values, float)
     span = t_all[-1] - t_all[0]
-    for k, c in zip(ks, colours):
-        label = _time_label(ds, k)
-        ax_p.plot(x1 / aH, _profile(ds["p"], k, rows) / pH, "o-", ms=3, lw=1.2, color=c,
-                  label=label)
-        if shear:
-            ax_q.plot(x1 / aH, _profile(ds["q1"], k, rows) / pH, "o-", ms=3, lw=1.2,
-                      color=c, label=label)
+    for n, k in enumerate(ks):
+        c, label = f"C{n % 10}", _time_label(ds, k)
+        for ax, name in zip(panels, ("p", "q1")):
+            ax.plot(x1 / aH, _profile(ds[name], k, rows) / pH, "o-", ms=3, lw=1.2,
+                    color=c, label=label)
         if sol is not None:
-            with np.errstate(all="ignore"):
-                if sol.has_field_pressure():
-                    pc = sol.pressure(k, xf, x2_row) / pH
-                    pc = np.where(np.isfinite(pc), pc, np.nan)
-                    ax_p.plot(xf / aH, pc, "-", color=GREY, lw=1.0, zorder=0)
-                if shear:
-                    ax_q.plot(xf / aH, sol.shear(k, xf, x2_row) / pH, "-", color=GREY,
-                              lw=1.0, zorder=0)
-        if reference is not None:
+            _draw_closed_form(sol, k, xf, x2_row, (pH, aH), ax_p, ax_q)
+        if ref is not None:
             tn = (t_all[k] - t_all[0]) / span if span > 0 else 0.0
-            j = int(np.argmin(np.abs(ref_t - tn)))
-            xr1 = np.asarray(reference["x1"].values, float)
-            ax_p.plot(xr1 / aH, _profile(reference["p"], j, ref_rows) / pH, "-",
-                      color=GREY, lw=1.0, zorder=0)
-            if shear and "q1" in reference:
-                ax_q.plot(xr1 / aH, _profile(reference["q1"], j, ref_rows) / pH, "-",
-                          color=GREY, lw=1.0, zorder=0)
-    grey_label = None
-    if sol is not None:
-        grey_label = f"closed form ({sol.name.replace('_', '-')})"
-    elif reference is not None:
-        grey_label = "reference archive"
-    if grey_label:
-        for ax in (ax_p, ax_q) if shear else (ax_p,):
+            _draw_reference(ref, tn, (pH, aH), ax_p, ax_q)
+    grey_label = (f"closed form ({sol.name.replace('_', '-')})" if sol is not None else
+                  "reference archive" if ref is not None else None)
+    for ax, name in zip(panels, ("p", "q1")):
+        if grey_label:
             ax.plot([], [], "-", color=GREY, label=grey_label)
+        ax.set_ylabel(f"{name} / {pn}")
+        ax.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
+        ax.grid(True, lw=0.3, alpha=0.5)
     if sol is not None and sol.name == "flat_punch":
         top = float(np.max(ds["p"].isel(time=ks).values)) / pH
         ax_p.set_ylim(0.0, 1.3 * top if top > 0 else 1.0)
-    ax_p.set_ylabel(f"p / {pn}")
-    ax_p.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
-    title = (f"{_scene_title(ds)}: profiles along x1 through the centre "
-             f"({pn} = {pH / 1e9:.4g} GPa, {an} = {aH * 1e3:.4g} mm)")
-    ax_p.set_title(title, fontsize=9)
+    ax_p.set_title(f"{_scene_title(ds)}: profiles along x1 through the centre "
+                   f"({pn} = {pH / 1e9:.4g} GPa, {an} = {aH * 1e3:.4g} mm)", fontsize=9)
     ax_p.legend(fontsize=7, ncol=2, loc="lower center")
-    last = ax_p
-    if shear:
-        ax_q.set_ylabel(f"q1 / {pn}")
-        ax_q.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
-        last = ax_q
-    last.set_xlabel(f"x1 / {an}")
-    for ax in (ax_p, ax_q) if shear else (ax_p,):
-        ax.grid(True, lw=0.3, alpha=0.5)
-    return _save(fig, path)
+    panels[-1].set_xlabel(f"x1 / {an}")
+    return fig
 
 
 def _scene_title(ds) -> str:
     try:
-        return _scene_of(ds).name
+        return scene_of(ds).name
     except ArchiveError:
         return str(ds.attrs.get("title", "archive"))
 
 
-def plot_profiles(ds, path, instants=None, *, closed_form=True) -> pathlib.Path:
+def plot_profiles(ds, instants=None, *, closed_form=True, reference=None, fig=None):
     """p/pH and q1/pH against x1/aH through the centre, at a few instants.
 
     Parameters
     ----------
     ds : xarray.Dataset or path
         An archive.
-    path : path
-        The PNG to write.
     instants : int, float or sequence, optional
         Indices (int, negative from the end) or times [s] (float, the nearest instant).
         Default: about five instants spread over the run, the turning points of T1
         included.
     closed_form : bool
-        Draw the closed form in grey where :func:`contactpipe.pipeline.compare.closed_form_for`
-        gives one.
+        Draw the closed form in grey where
+        :func:`contactpipe.pipeline.reference.closed_form_for` gives one.
+    reference : xarray.Dataset or path, optional
+        A reference archive drawn in grey instead of the closed form, at its instants
+        nearest in t_norm = (t - t0)/window.
+    fig : matplotlib.figure.Figure, optional
+        Draw into it (one axes for p, a second for q1 if the archive has shear); default
+        a new figure.
 
     Returns
     -------
-    pathlib.Path
-        ``path``. pH, aH are the Hertz peak pressure and contact radius with the scene's
+    matplotlib.figure.Figure
+        pH, aH are the Hertz peak pressure and contact radius with the scene's
         instantaneous moduli (flat punch: mean pressure and punch radius). An even grid
         has no centre row: the two middle rows are averaged.
     """
-    return _profiles_figure(ds, path, instants, closed_form=closed_form)
+    with contextlib.ExitStack() as stack:
+        ds = stack.enter_context(_dataset(ds))
+        ks = _instants(ds, instants)
+        ref = None if reference is None else stack.enter_context(_dataset(reference))
+        sol = _solution(ds) if (closed_form and ref is None) else None
+        return _profiles(ds, ks, sol, ref, fig)
 
 
 # --------------------------------------------------------------------------- maps
@@ -328,57 +397,34 @@ def _prefixed(value):
     return 1.0, "Pa"
 
 
-def plot_maps(ds, path, instant=-1) -> pathlib.Path:
-    """Maps of p, |q| and the contact status at one instant, axes in mm.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset or path
-    path : path
-        The PNG to write.
-    instant : int or float
-        Index (negative from the end) or time [s]; default the last instant.
-    """
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.patches import Patch
-    ds = _open(ds)
-    k = _index(ds, instant)
-    x1, x2, d1, d2 = _grid(ds)
-    extent = [(x1[0] - d1 / 2) * 1e3, (x1[-1] + d1 / 2) * 1e3,
-              (x2[0] - d2 / 2) * 1e3, (x2[-1] + d2 / 2) * 1e3]
-    fig, axes = _figure(1, 3)
-    p = np.asarray(ds["p"].isel(time=k).values, float)
-    f, unit = _prefixed(float(p.max()))
-    im = axes[0, 0].imshow(p.T / f, origin="lower", extent=extent, cmap="viridis",
-                           interpolation="nearest")
-    fig.colorbar(im, ax=axes[0, 0], fraction=0.046, pad=0.04, label=f"p [{unit}]")
-    axes[0, 0].set_title("pressure p", fontsize=9)
-    ax = axes[0, 1]
+def _map_shear(fig, ax, ds, k, extent, p_max):
     if "q1" in ds:
         q = np.hypot(np.asarray(ds["q1"].isel(time=k).values, float),
                      np.asarray(ds["q2"].isel(time=k).values, float) if "q2" in ds else 0.0)
-        fq, uq = _prefixed(float(q.max()) if q.max() > 0 else float(p.max()))
+        fq, uq = _prefixed(float(q.max()) if q.max() > 0 else p_max)
         im = ax.imshow(q.T / fq, origin="lower", extent=extent, cmap="magma",
                        interpolation="nearest")
         fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=f"|q| [{uq}]")
-        ax.set_title("shear traction |q|", fontsize=9)
     else:
-        ax.imshow(np.zeros((x2.size, x1.size)), origin="lower", extent=extent,
+        ax.imshow(np.zeros((ds.sizes["x2"], ds.sizes["x1"])), origin="lower", extent=extent,
                   cmap="Greys", vmin=0, vmax=1, interpolation="nearest")
         ax.text(0.5, 0.5, "frictionless:\nno shear", transform=ax.transAxes,
                 ha="center", va="center", fontsize=9)
-        ax.set_title("shear traction |q|", fontsize=9)
-    ax = axes[0, 2]
+    ax.set_title("shear traction |q|", fontsize=9)
+
+
+def _map_status(ax, ds, k, extent):
+    # matplotlib is imported here, not at the top: a heavy import that only drawing needs
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
     status = np.asarray(ds["status"].isel(time=k).values, float)
     cmap = ListedColormap(STATUS_COLOURS)
     norm = BoundaryNorm([-0.5, 0.5, 1.5, 2.5], cmap.N)
     ax.imshow(status.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
               interpolation="nearest")
     mu = None
-    try:
-        mu = float(_scene_of(ds).friction.mu)
-    except ArchiveError:
-        pass
+    with contextlib.suppress(ArchiveError):
+        mu = float(scene_of(ds).friction.mu)
     names = ("separated", "stick", "slip") if mu != 0 else \
         ("separated", "stick", "contact (frictionless)")
     present = set(np.unique(status).astype(int).tolist())
@@ -387,14 +433,46 @@ def plot_maps(ds, path, instant=-1) -> pathlib.Path:
     ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2),
               ncol=len(handles), frameon=False, handlelength=1.0, columnspacing=0.8)
     ax.set_title("status", fontsize=9)
-    for a in axes[0]:
-        a.set_xlabel("x1 [mm]")
-        a.set_aspect("equal")
-        a.tick_params(labelsize=7)
-    axes[0, 0].set_ylabel("x2 [mm]")
-    t = float(ds["time"].values[k])
-    fig.suptitle(f"{_scene_title(ds)} at t = {t:.4g} s ({_time_label(ds, k)})", fontsize=10)
-    return _save(fig, path)
+
+
+def plot_maps(ds, instant=-1, *, fig=None):
+    """Maps of p, |q| and the contact status at one instant, axes in mm.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset or path
+    instant : int or float
+        Index (negative from the end) or time [s]; default the last instant.
+    fig : matplotlib.figure.Figure, optional
+        Draw into it (three axes side by side); default a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with _dataset(ds) as ds:
+        k = _index(ds, instant)
+        x1, x2, d1, d2 = grid_of(ds)
+        extent = [(x1[0] - d1 / 2) * 1e3, (x1[-1] + d1 / 2) * 1e3,
+                  (x2[0] - d2 / 2) * 1e3, (x2[-1] + d2 / 2) * 1e3]
+        fig, axes = _grid_axes(fig, 1, 3)
+        p = np.asarray(ds["p"].isel(time=k).values, float)
+        f, unit = _prefixed(float(p.max()))
+        im = axes[0, 0].imshow(p.T / f, origin="lower", extent=extent, cmap="viridis",
+                               interpolation="nearest")
+        fig.colorbar(im, ax=axes[0, 0], fraction=0.046, pad=0.04, label=f"p [{unit}]")
+        axes[0, 0].set_title("pressure p", fontsize=9)
+        _map_shear(fig, axes[0, 1], ds, k, extent, float(p.max()))
+        _map_status(axes[0, 2], ds, k, extent)
+        for a in axes[0]:
+            a.set_xlabel("x1 [mm]")
+            a.set_aspect("equal")
+            a.tick_params(labelsize=7)
+        axes[0, 0].set_ylabel("x2 [mm]")
+        t = float(ds["time"].values[k])
+        fig.suptitle(f"{_scene_title(ds)} at t = {t:.4g} s ({_time_label(ds, k)})",
+                     fontsize=10)
+    return fig
 
 
 # --------------------------------------------------------------------------- series
@@ -406,65 +484,86 @@ def _require_frictional(ds, what):
                            f"{ds.attrs.get('models', '?')})")
 
 
-def plot_hysteresis(ds, path) -> pathlib.Path:
+def plot_hysteresis(ds, *, ax=None):
     """The fretting loop: T1 [N] against omega1 [um], closed form in grey (MD).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset or path
+    ax : matplotlib.axes.Axes, optional
+        Draw into it; default a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
 
     Raises
     ------
     ArchiveError
         The archive is frictionless (no T1, omega1).
     """
-    ds = _open(ds)
-    _require_frictional(ds, "the hysteresis loop")
-    fig, axes = _figure()
-    ax = axes[0, 0]
-    om = np.asarray(ds["omega1"].values, float)
-    T = np.asarray(ds["T1"].values, float)
-    sol = _solution(ds)
-    loop = sol.loop() if sol is not None else None
-    if loop is not None:
-        ax.plot(loop[1] * 1e6, loop[0], "-", color=GREY_WIDE, lw=4.0, zorder=0,
-                label="closed form (Mindlin-Deresiewicz)")
-    ax.plot(om * 1e6, T, "o-", ms=3, lw=1.2, color="C0", label="numerical")
-    ax.set_xlabel("omega1 [µm]")
-    ax.set_ylabel("T1 [N]")
-    ax.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
-    ax.axvline(0.0, color="0.85", lw=0.6, zorder=-1)
-    if "dissipation" in ds:
-        ax.set_title(f"{_scene_title(ds)}: tangential force against rigid displacement "
-                     f"(dissipated {float(ds['dissipation'].values[-1]):.4g} J)", fontsize=9)
-    ax.grid(True, lw=0.3, alpha=0.5)
-    ax.legend(fontsize=8)
-    return _save(fig, path)
+    with _dataset(ds) as ds:
+        _require_frictional(ds, "the hysteresis loop")
+        fig, ax = _axes(ax)
+        om = np.asarray(ds["omega1"].values, float)
+        T = np.asarray(ds["T1"].values, float)
+        sol = _solution(ds)
+        loop = sol.loop() if sol is not None else None
+        if loop is not None:
+            ax.plot(loop[1] * 1e6, loop[0], "-", color=GREY_WIDE, lw=4.0, zorder=0,
+                    label="closed form (Mindlin-Deresiewicz)")
+        ax.plot(om * 1e6, T, "o-", ms=3, lw=1.2, color="C0", label="numerical")
+        ax.set_xlabel("omega1 [µm]")
+        ax.set_ylabel("T1 [N]")
+        ax.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
+        ax.axvline(0.0, color="0.85", lw=0.6, zorder=-1)
+        if "dissipation" in ds:
+            ax.set_title(f"{_scene_title(ds)}: tangential force against rigid displacement "
+                         f"(dissipated {float(ds['dissipation'].values[-1]):.4g} J)",
+                         fontsize=9)
+        ax.grid(True, lw=0.3, alpha=0.5)
+        ax.legend(fontsize=8)
+    return fig
 
 
-def plot_radii(ds, path) -> pathlib.Path:
+def plot_radii(ds, *, ax=None):
     """Contact radius sqrt(A/pi) and stick radius sqrt(A_stick/pi) [mm] against time [s],
-    closed forms in grey where they apply."""
-    ds = _open(ds)
-    fig, axes = _figure()
-    ax = axes[0, 0]
-    t = np.asarray(ds["time"].values, float)
-    a = np.sqrt(np.asarray(ds["contact_area"].values, float) / math.pi)
-    ax.plot(t, a * 1e3, "o-", ms=3, color="C0", label="contact radius")
-    if "stick_area" in ds:
-        c = np.sqrt(np.asarray(ds["stick_area"].values, float) / math.pi)
-        ax.plot(t, c * 1e3, "s-", ms=3, color="C3", label="stick radius")
-    sol = _solution(ds)
-    if sol is not None:
-        n = t.size
-        ax.plot(t, [sol.contact_radius(k) * 1e3 for k in range(n)], "-", color=GREY_WIDE,
-                lw=4.0, zorder=0, label=f"closed form ({sol.name.replace('_', '-')})")
-        if sol.name == "mindlin_deresiewicz":
-            ax.plot(t, [sol.stick_radius(k) * 1e3 for k in range(n)], "-", color=GREY_WIDE,
-                    lw=4.0, zorder=0)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("radius [mm]")
-    ax.set_ylim(bottom=0.0)
-    ax.set_title(f"{_scene_title(ds)}: radii of the circles of equal area", fontsize=9)
-    ax.grid(True, lw=0.3, alpha=0.5)
-    ax.legend(fontsize=8)
-    return _save(fig, path)
+    closed forms in grey where they apply.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset or path
+    ax : matplotlib.axes.Axes, optional
+        Draw into it; default a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    with _dataset(ds) as ds:
+        fig, ax = _axes(ax)
+        t = np.asarray(ds["time"].values, float)
+        a = np.sqrt(np.asarray(ds["contact_area"].values, float) / math.pi)
+        ax.plot(t, a * 1e3, "o-", ms=3, color="C0", label="contact radius")
+        if "stick_area" in ds:
+            c = np.sqrt(np.asarray(ds["stick_area"].values, float) / math.pi)
+            ax.plot(t, c * 1e3, "s-", ms=3, color="C3", label="stick radius")
+        sol = _solution(ds)
+        if sol is not None:
+            n = t.size
+            ax.plot(t, [sol.contact_radius(k) * 1e3 for k in range(n)], "-",
+                    color=GREY_WIDE, lw=4.0, zorder=0,
+                    label=f"closed form ({sol.name.replace('_', '-')})")
+            if sol.name == "mindlin_deresiewicz":
+                ax.plot(t, [sol.stick_radius(k) * 1e3 for k in range(n)], "-",
+                        color=GREY_WIDE, lw=4.0, zorder=0)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("radius [mm]")
+        ax.set_ylim(bottom=0.0)
+        ax.set_title(f"{_scene_title(ds)}: radii of the circles of equal area", fontsize=9)
+        ax.grid(True, lw=0.3, alpha=0.5)
+        ax.legend(fontsize=8)
+    return fig
 
 
 # --------------------------------------------------------------------------- sweeps
@@ -494,62 +593,21 @@ def _value_text(v):
     return str(v)
 
 
-def plot_sweep(sw, path, variable="contact_area", x="time") -> pathlib.Path:
-    """One curve of ``variable`` per member of a combined sweep Dataset.
+@contextlib.contextmanager
+def _sweep(sw):
+    """The combined Dataset of ``sw`` (a Dataset or a sweep folder); closed after if
+    opened here."""
+    if isinstance(sw, xr.Dataset):
+        yield sw
+        return
+    opened = open_sweep(sw)
+    try:
+        yield opened
+    finally:
+        opened.close()
 
-    Parameters
-    ----------
-    sw : xarray.Dataset or path
-        A sweep (:func:`contactpipe.open_sweep`): archives combined along one dimension
-        per swept parameter; the dimensions beyond time/t_norm/x1/x2 are looped over
-        (all their combinations).
-    path : path
-        The PNG to write.
-    variable : str
-        A series (over time). A field is reduced to its largest value over x1, x2.
-    x : str
-        The abscissa; ``"time"`` uses ``t_norm`` when the sweep has it (members with
-        different windows are aligned on it).
 
-    Raises
-    ------
-    ArchiveError
-        ``variable`` or ``x`` is not in the sweep.
-    """
-    if not isinstance(sw, xr.Dataset):
-        sw = _open_sweep(sw)
-    if variable not in sw:
-        raise ArchiveError(f"variable {variable!r} is not in the sweep; it has: "
-                           f"{', '.join(sorted(map(str, sw.data_vars)))}")
-    da = sw[variable]
-    reduced = [d for d in ("x1", "x2") if d in da.dims]
-    if reduced:
-        da = da.max(reduced)
-    has_t_norm = "t_norm" in sw.coords or "t_norm" in sw.dims
-    xname = "t_norm" if (x == "time" and has_t_norm) else x
-    if xname not in sw.coords and xname not in sw.dims and xname not in sw:
-        raise ArchiveError(f"x = {x!r} is not a coordinate of the sweep")
-    extra = [d for d in da.dims if d not in BASE_DIMS]
-    fig, axes = _figure()
-    ax = axes[0, 0]
-    combos = list(itertools.product(*[range(da.sizes[d]) for d in extra])) if extra else [()]
-    xs_all = sw[xname] if xname in sw.variables else None
-    for n, combo in enumerate(combos):
-        sel = dict(zip(extra, combo))
-        y = da.isel(sel) if sel else da
-        if xs_all is not None:
-            xv = xs_all.isel({d: i for d, i in sel.items() if d in xs_all.dims})
-        else:
-            xv = y[xname]
-        xv = np.asarray(xv.values, float).ravel()
-        yv = np.asarray(y.values, float).ravel()
-        if xv.size != yv.size:
-            raise ArchiveError(f"x = {xname!r} does not run along {variable!r} "
-                               f"({xv.size} values against {yv.size})")
-        label = _member_label(sw, sel)
-        ax.plot(xv, yv, "-", marker="o" if yv.size <= 30 else None, ms=3, lw=1.2,
-                color=f"C{n % 10}", label=label)
-    from ..nomenclature import VARIABLES
+def _axis_labels(ax, sw, variable, xname, reduced):
     known = VARIABLES.get(variable, {})
     units = sw[variable].attrs.get("units", known.get("units", ""))
     long = sw[variable].attrs.get("long_name", known.get("long_name", variable))
@@ -561,48 +619,98 @@ def plot_sweep(sw, path, variable="contact_area", x="time") -> pathlib.Path:
         ax.set_xlabel("t / τ (dimensionless time)")
     else:
         ax.set_xlabel(f"{xname}" + (f" [{xunits}]" if xunits else ""))
-    ax.grid(True, lw=0.3, alpha=0.5)
-    if len(combos) <= MAX_LEGEND:
-        ax.legend(fontsize=7, ncol=1 if len(combos) <= 8 else 2)
-    ax.set_title(f"sweep over {', '.join(extra) if extra else '(no axis)'}: {variable} "
-                 f"({len(combos)} members)", fontsize=9)
-    return _save(fig, path)
 
 
-def _open_sweep(path):
-    try:
-        from .sweep import open_sweep
-    except ImportError as err:            # pragma: no cover - the sweep stage is optional
-        raise ArchiveError(f"{path}: cannot open a sweep ({err})") from None
-    return open_sweep(path)
+def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
+    """One curve of ``variable`` per member of a combined sweep Dataset.
+
+    Parameters
+    ----------
+    sw : xarray.Dataset or path
+        A sweep (:func:`contactpipe.open_sweep`, or its folder): archives combined along
+        one dimension per swept parameter; the dimensions beyond time/t_norm/x1/x2 are
+        looped over (all their combinations).
+    variable : str
+        A series (over time). A field is reduced to its largest value over x1, x2.
+    x : str
+        The abscissa; ``"time"`` uses ``t_norm`` when the sweep has it (members with
+        different windows are aligned on it).
+    ax : matplotlib.axes.Axes, optional
+        Draw into it; default a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ArchiveError
+        ``variable`` or ``x`` is not in the sweep.
+    """
+    with _sweep(sw) as sw:
+        if variable not in sw:
+            raise ArchiveError(f"variable {variable!r} is not in the sweep; it has: "
+                               f"{', '.join(sorted(map(str, sw.data_vars)))}")
+        da = sw[variable]
+        reduced = [d for d in ("x1", "x2") if d in da.dims]
+        if reduced:
+            da = da.max(reduced)
+        has_t_norm = "t_norm" in sw.coords or "t_norm" in sw.dims
+        xname = "t_norm" if (x == "time" and has_t_norm) else x
+        if xname not in sw.coords and xname not in sw.dims and xname not in sw:
+            raise ArchiveError(f"x = {x!r} is not a coordinate of the sweep")
+        extra = [d for d in da.dims if d not in BASE_DIMS]
+        fig, ax = _axes(ax)
+        combos = list(itertools.product(*[range(da.sizes[d]) for d in extra])) \
+            if extra else [()]
+        xs_all = sw[xname] if xname in sw.variables else None
+        for n, combo in enumerate(combos):
+            sel = dict(zip(extra, combo))
+            y = da.isel(sel) if sel else da
+            xv = y[xname] if xs_all is None else \
+                xs_all.isel({d: i for d, i in sel.items() if d in xs_all.dims})
+            xv = np.asarray(xv.values, float).ravel()
+            yv = np.asarray(y.values, float).ravel()
+            if xv.size != yv.size:
+                raise ArchiveError(f"x = {xname!r} does not run along {variable!r} "
+                                   f"({xv.size} values against {yv.size})")
+            ax.plot(xv, yv, "-", marker="o" if yv.size <= 30 else None, ms=3, lw=1.2,
+                    color=f"C{n % 10}", label=_member_label(sw, sel))
+        _axis_labels(ax, sw, variable, xname, reduced)
+        ax.grid(True, lw=0.3, alpha=0.5)
+        if len(combos) <= MAX_LEGEND:
+            ax.legend(fontsize=7, ncol=1 if len(combos) <= 8 else 2)
+        ax.set_title(f"sweep over {', '.join(extra) if extra else '(no axis)'}: {variable} "
+                     f"({len(combos)} members)", fontsize=9)
+    return fig
 
 
 # --------------------------------------------------------------------------- all
 
-def _standard(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
-    ds = _open(ds)
-    out_dir = pathlib.Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    paths = [plot_profiles(ds, out_dir / f"{prefix}profiles.png"),
-             plot_maps(ds, out_dir / f"{prefix}maps.png", instant)]
-    if _has_tangential_load(ds):
-        paths.append(plot_hysteresis(ds, out_dir / f"{prefix}hysteresis.png"))
-    paths.append(plot_radii(ds, out_dir / f"{prefix}radii.png"))
-    return paths
-
-
-def standard_figures(ds, out_dir, prefix="") -> list[pathlib.Path]:
+def standard_figures(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
     """Every figure that applies to an archive, written into ``out_dir``.
 
-    ``<prefix>profiles.png`` and ``<prefix>maps.png`` always, ``<prefix>hysteresis.png``
-    for a frictional archive with a tangential load, ``<prefix>radii.png`` always.
+    ``<prefix>profiles.png`` and ``<prefix>maps.png`` (at ``instant``) always,
+    ``<prefix>hysteresis.png`` for a frictional archive with a tangential load,
+    ``<prefix>radii.png`` always (:func:`save_figure` each).
 
     Returns
     -------
     list of pathlib.Path
         The files written, in that order.
+
+    Raises
+    ------
+    OutputPathError
+        ``out_dir`` is not a folder (checked before any drawing).
     """
-    return _standard(ds, out_dir, prefix)
+    out_dir = check_output_dir(out_dir, "figure folder")
+    with _dataset(ds) as ds:
+        drawn = [("profiles", plot_profiles(ds)), ("maps", plot_maps(ds, instant))]
+        if has_tangential_load(ds):
+            drawn.append(("hysteresis", plot_hysteresis(ds)))
+        drawn.append(("radii", plot_radii(ds)))
+    return [save_figure(fig, out_dir / f"{prefix}{kind}.png") for kind, fig in drawn]
 
 
 # --------------------------------------------------------------------------- CLI
@@ -610,7 +718,8 @@ def standard_figures(ds, out_dir, prefix="") -> list[pathlib.Path]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("archive", type=pathlib.Path,
                         help="archive (netCDF), or a sweep folder")
-    parser.add_argument("-o", "--output", type=pathlib.Path, required=True,
+    # str, not pathlib.Path: Path("") is "." and an empty -o must be refused, not the cwd
+    parser.add_argument("-o", "--output", required=True, metavar="FIG",
                         help="the PNG to write (a folder with --kind all)")
     parser.add_argument("--kind", choices=KINDS + ("all",), default="profiles",
                         help="which figure (default: profiles)")
@@ -621,22 +730,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="sweep folder only: the series to plot (default contact_area)")
 
 
+def _inputs(source: pathlib.Path) -> list:
+    """The files an output must not overwrite: the archive, or a sweep folder's manifest
+    and member archives."""
+    if source.is_dir():
+        return [source / MANIFEST] + sorted(source.glob("*.nc"))
+    return [source]
+
+
 def main(args) -> int:
-    if args.archive.is_dir():
-        written = [plot_sweep(_open_sweep(args.archive), args.output, args.variable)]
-    elif args.kind == "all":
-        written = _standard(args.archive, args.output, "",
-                            -1 if args.instant is None else args.instant)
-    elif args.kind == "profiles":
-        written = [plot_profiles(args.archive, args.output,
-                                 None if args.instant is None else [args.instant])]
-    elif args.kind == "maps":
-        written = [plot_maps(args.archive, args.output,
-                             -1 if args.instant is None else args.instant)]
-    elif args.kind == "hysteresis":
-        written = [plot_hysteresis(args.archive, args.output)]
+    source = args.archive
+    inputs = _inputs(source)
+    if args.kind == "all" and not source.is_dir():
+        check_output_dir(args.output, "figure folder", inputs=inputs)
+        written = standard_figures(source, args.output, "",
+                                   -1 if args.instant is None else args.instant)
     else:
-        written = [plot_radii(args.archive, args.output)]
+        target = check_output_path(args.output, "figure", inputs=inputs)
+        check_output_dir(target.parent, "folder of the figure")
+        if source.is_dir():
+            fig = plot_sweep(source, args.variable)
+        elif args.kind == "profiles":
+            fig = plot_profiles(source, None if args.instant is None else [args.instant])
+        elif args.kind == "maps":
+            fig = plot_maps(source, -1 if args.instant is None else args.instant)
+        elif args.kind == "hysteresis":
+            fig = plot_hysteresis(source)
+        else:
+            fig = plot_radii(source)
+        written = [save_figure(fig, target)]
     for path in written:
         print(f"wrote {path}")
     return 0

@@ -1,6 +1,7 @@
 """Batch pipeline: sweep -> compare -> plot, idempotent and safe to run from cron.
 
-``contactpipe pipeline PIPELINE.toml [--scheduler ADDRESS] [--workers N] [--no-progress]``
+``contactpipe pipeline PIPELINE.toml [--scheduler ADDRESS] [--workers N]
+[--shared-disk | --no-shared-disk] [--no-progress]``
 runs the sweep of the file (on dask, resumable: :mod:`contactpipe.pipeline.sweep`), compares every
 member with its closed form or a reference archive (:mod:`contactpipe.pipeline.compare`), draws the
 standard figures of every member and an overlay of the sweep (:mod:`contactpipe.pipeline.plot`),
@@ -20,10 +21,15 @@ Pipeline file::
     figures = ["profiles", "hysteresis", "radii", "sweep"]    # default: all four
     variables = ["contact_area"]   # what the sweep overlay shows (default contact_area)
     [dask]                         # optional; overrides the sweep file's [dask]
-    scheduler = ""                 # address, "synchronous", or "" (a LocalCluster)
-    n_workers = 2
+    scheduler = ""                 # address, "synchronous", or "" (a LocalCluster);
+    n_workers = 2                  # an address is TRUSTED code (see below)
 
-``out`` may also be given inside ``[sweep]``. Members without a closed form are not
+A scheduler address is trusted code: dask's protocol unpickles what the scheduler sends,
+so never point a pipeline at a scheduler you do not control (the sweep's workers need
+not share this machine's disk: :mod:`contactpipe.pipeline.execute`).
+
+``out`` may also be given inside ``[sweep]``; it must be a folder (existing or to be
+created): a file, a device or the pipeline file itself is refused before any work. Members without a closed form are not
 compared when ``reference = "closed_form"`` (the summary says so); that is not a failure.
 
 Outputs, in ``out``
@@ -47,10 +53,13 @@ archive is complete and valid) and rewrites no product: a comparison or figure i
 only when missing or older than its archive (or the reference archive); the sweep overlay
 when older than any member archive or when the set of members changed. Every product is
 written to a temporary name and renamed, so an interrupted run leaves no half file.
+Figures are drawn by :mod:`contactpipe.pipeline.plot` and written by its
+:func:`~contactpipe.pipeline.plot.save_figure`.
 
 Cron-safe
 ---------
-A run holds an exclusive lock on ``out/.pipeline.lock`` (``fcntl.flock``, non-blocking);
+A run holds an exclusive lock on ``out/.pipeline.lock``
+(:func:`contactpipe.files.exclusive_lock`, non-blocking);
 a second run that finds it held exits at once with status 3 and one line on stderr
 ("another pipeline run holds the lock ..."), doing nothing. The lock dies with its
 process, so a killed run never blocks the next one, and the next one resumes where it
@@ -59,24 +68,28 @@ stopped. A crontab line (every 30 minutes, no progress bars, one log)::
     */30 * * * *  cd /data/study && contactpipe pipeline paper-fig3.toml --no-progress >> pipeline.log 2>&1
 
 Exit status: 0 all done; 1 a member (or one of its products) failed — the others are
-still completed, and the failures are listed; 2 a bad pipeline or sweep file; 3 another
-run holds the lock.
+still completed, and the failures are listed; 2 a bad pipeline or sweep file or out
+folder; 3 another run holds the lock.
 """
 from __future__ import annotations
 
-import contextlib
+import argparse
 import dataclasses
-import importlib
 import json
 import pathlib
 import sys
 import time as _time
 
+from tqdm.auto import tqdm
+
 from ..exceptions import ArchiveError, ContactpipeError
 from ..exceptions import one_line as _one_line
-from ..files import (TEMP_SUFFIX, LockedError, atomic_path, exclusive_lock, utc_now as _now,
-                     write_json as _write_json)
+from ..files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
+                     utc_now as _now, write_json as _write_json)
+from . import compare as compare_stage, plot as plot_stage
+from .combine import open_sweep
 from .config import CLOSED_FORM, FIGURES, MEMBER_FIGURES, PipelineSpec, read_pipeline_file
+from .reference import closed_form_for
 from .sweep import SweepLockedError, sweep
 
 __all__ = ["run_pipeline", "read_pipeline_file", "PipelineSpec", "PipelineResult",
@@ -131,10 +144,31 @@ class PipelineResult:
         return self.sweep.skipped
 
 
+#: The failures of one product that the pipeline records and goes on after: a bad
+#: archive or scene (ContactpipeError), a value a stage refuses (ValueError), the disk
+#: (OSError). Anything else is a bug and stops the run with its own message.
+PRODUCT_ERRORS = (ContactpipeError, ValueError, OSError)
+
+
+@dataclasses.dataclass
+class _Log:
+    """The products of a run: written, up to date, failed."""
+
+    written: list = dataclasses.field(default_factory=list)
+    up_to_date: list = dataclasses.field(default_factory=list)
+    failed: list = dataclasses.field(default_factory=list)
+
+    def fail(self, member: str, digest, stage: str, err) -> dict:
+        error = err if isinstance(err, str) else _one_line(err)
+        self.failed.append({"member": member, "digest": digest, "stage": stage,
+                            "error": error})
+        return {"status": "failed", "error": error}
+
+
 def _mtime(path: pathlib.Path) -> int | None:
     try:
         return path.stat().st_mtime_ns
-    except OSError:
+    except FileNotFoundError:
         return None
 
 
@@ -150,82 +184,138 @@ def _fresh(product: pathlib.Path, inputs) -> bool:
     return True
 
 
-def _atomic(path: pathlib.Path):
-    """:func:`contactpipe.files.atomic_path` keeping the suffix (writers infer the format)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return atomic_path(path, keep_suffix=True)
-
-
 def _clean_tmp(folder: pathlib.Path) -> None:
     """Remove temporaries a killed run left (we hold the lock)."""
     if folder.is_dir():
         for p in folder.glob(f".*{TEMP_SUFFIX}*"):
-            with contextlib.suppress(OSError):
-                p.unlink()
+            p.unlink(missing_ok=True)
 
 
 def _read_previous(out: pathlib.Path) -> dict:
+    """The summary of the previous run ({} when there is none or it is not JSON)."""
     try:
         with open(out / SUMMARY, encoding="utf-8") as f:
             prev = json.load(f)
-        return prev if isinstance(prev, dict) else {}
-    except (OSError, ValueError):
+    except FileNotFoundError:
         return {}
+    except ValueError:                  # not JSON (a hand edit, a foreign file): start anew
+        return {}
+    return prev if isinstance(prev, dict) else {}
 
 
-def _compare_member(mod, archive, reference, product):
+def _compare_member(archive, reference, product) -> dict:
     """Write the comparison table of one member; returns its record."""
     if reference == CLOSED_FORM:
-        form = mod.closed_form_for(archive)
+        form = closed_form_for(archive)
         if form is None:
             return {"status": "no closed form", "path": None}
-        with _atomic(product) as tmp:
-            mod.compare(archive, None, out=tmp)
+        compare_stage.compare(archive, None, out=product)
         return {"status": "written", "path": str(product), "closed_form": form}
-    with _atomic(product) as tmp:
-        mod.compare(archive, reference, out=tmp)
+    compare_stage.compare(archive, reference, out=product)
     return {"status": "written", "path": str(product), "reference": str(reference)}
 
 
-def _applies(kind: str, ds) -> bool:
-    """Whether a member figure applies: the fretting loop needs a frictional archive with
-    a tangential load (as :func:`contactpipe.pipeline.plot.standard_figures` decides)."""
-    if kind == "hysteresis":
-        import numpy as np
-        return all(v in ds for v in ("q1", "T1", "omega1")) and \
-            bool(np.any(np.abs(np.asarray(ds["T1"].values)) > 0))
-    return True
+def _compare_product(spec, m, archive, product, log: _Log) -> dict:
+    inputs = [archive] + ([spec.reference] if spec.reference != CLOSED_FORM else [])
+    if _fresh(product, inputs):
+        log.up_to_date.append(product)
+        return {"status": "up to date", "path": str(product)}
+    try:
+        rec = _compare_member(str(archive), spec.reference, product)
+    except PRODUCT_ERRORS as err:
+        return log.fail(m.label, m.digest, "compare", err)
+    if rec["status"] == "written":
+        log.written.append(product)
+    return rec
 
 
-def _member_figures(mod, ds, archive: pathlib.Path, figdir: pathlib.Path, digest: str,
-                    kinds):
+def _member_figures(ds, archive: pathlib.Path, figdir: pathlib.Path, digest: str, kinds):
     """Draw the member figures ``kinds`` that apply and are not current.
 
-    Returns (written, up_to_date, not_applicable) lists; ``plot.plot_<kind>(ds, path)``
-    draws ``figures/<digest>-<kind>.png`` (through a temporary name).
+    Returns (written, up_to_date, not_applicable) lists; ``plot.plot_<kind>(ds)`` draws
+    the figure, :func:`~contactpipe.pipeline.plot.save_figure` writes
+    ``figures/<digest>-<kind>.png``.
     """
     written, current, skipped = [], [], []
     for kind in kinds:
-        if not _applies(kind, ds):
+        if not plot_stage.figure_applies(kind, ds):
             skipped.append(kind)
             continue
         target = figdir / f"{digest}-{kind}.png"
         if _fresh(target, [archive]):
             current.append(target)
             continue
-        fn = getattr(mod, f"plot_{kind}", None)
-        if fn is None:
-            raise ContactpipeError(f"the plot module has no plot_{kind}()")
-        with _atomic(target) as tmp:
-            fn(ds, tmp)
+        draw = getattr(plot_stage, f"plot_{kind}")
+        plot_stage.save_figure(draw(ds), target)
         written.append(target)
     return written, current, skipped
+
+
+def _figure_products(m, archive, figdir, kinds, log: _Log) -> dict:
+    try:
+        ds, _ = compare_stage.load_dataset(archive)
+        with ds:
+            w, cur, na = _member_figures(ds, archive, figdir, m.digest, kinds)
+    except PRODUCT_ERRORS as err:
+        return log.fail(m.label, m.digest, "figures", err)
+    log.written.extend(w)
+    log.up_to_date.extend(cur)
+    return {"status": "written" if w else "up to date", "paths": [str(p) for p in w + cur],
+            "not_applicable": na}
+
+
+def _member_products(spec, m, out, log: _Log) -> dict:
+    """The comparison and figures of one member that is done."""
+    archive = out / m.file
+    rec = {}
+    if spec.reference is not None:
+        rec["compare"] = _compare_product(spec, m, archive, out / "compare" / f"{m.digest}.nc",
+                                          log)
+    kinds = [k for k in spec.figures if k in MEMBER_FIGURES]
+    if kinds:
+        rec["figures"] = _figure_products(m, archive, out / "figures", kinds, log)
+    return rec
+
+
+def _sweep_figures(spec, out, done: dict, previous: dict, log: _Log) -> dict:
+    """The overlays of the sweep (one per variable) that are not current."""
+    digests = sorted(done)
+    archives = [out / done[d].file for d in digests]
+    prev_sweep = previous.get("sweep_figures", {})
+    figs, todo = {}, []
+    for var in spec.variables:
+        target = out / "figures" / f"sweep-{var}.png"
+        prev = prev_sweep.get(var, {}) if isinstance(prev_sweep, dict) else {}
+        if isinstance(prev, dict) and prev.get("members") == digests \
+                and _fresh(target, archives):
+            figs[var] = {"status": "up to date", "path": str(target), "members": digests}
+            log.up_to_date.append(target)
+        else:
+            todo.append((var, target))
+    if not todo:
+        return figs
+    try:
+        sw = open_sweep(out, allow_missing=True)
+    except ArchiveError as err:
+        log.fail("(sweep)", None, "sweep-figure", err)
+        return figs
+    with sw:
+        x = "t_norm" if "t_norm" in sw.dims else "time"
+        for var, target in todo:
+            try:
+                plot_stage.save_figure(plot_stage.plot_sweep(sw, variable=var, x=x), target)
+            except PRODUCT_ERRORS as err:
+                figs[var] = log.fail("(sweep)", None, "sweep-figure", err)
+                continue
+            figs[var] = {"status": "written", "path": str(target), "members": digests}
+            log.written.append(target)
+    return figs
 
 
 # ------------------------------------------------------------------- the run
 
 def run_pipeline(path, *, scheduler=None, progress=True, n_workers=None,
-                 client=None) -> PipelineResult:
+                 client=None, shared_disk=None) -> PipelineResult:
     """Run a pipeline file: sweep -> compare -> plot -> summary (module docstring).
 
     Parameters
@@ -234,12 +324,16 @@ def run_pipeline(path, *, scheduler=None, progress=True, n_workers=None,
         The pipeline file (TOML).
     scheduler : str, optional
         Dask scheduler address (or ``"synchronous"``); overrides the file's ``[dask]``.
+        Trusted code: dask unpickles what the scheduler sends.
     progress : bool
         Progress bars.
     n_workers : int, optional
         LocalCluster workers; overrides the file.
     client : distributed.Client, optional
         Submit the sweep to it.
+    shared_disk : bool, optional
+        Whether the sweep's workers write the archives into ``out`` themselves
+        (:func:`contactpipe.pipeline.sweep.sweep`).
 
     Returns
     -------
@@ -251,123 +345,26 @@ def run_pipeline(path, *, scheduler=None, progress=True, n_workers=None,
     ------
     SceneError
         A bad pipeline or sweep file, or a bad member scene (nothing was run).
+    OutputPathError
+        ``out`` exists and is not a folder, or is the pipeline file (nothing was run).
     PipelineLockedError
         Another run holds ``out/.pipeline.lock`` (or a sweep holds the folder).
     """
     t0 = _time.perf_counter()
     spec = read_pipeline_file(path)
-    out = spec.out
+    out = check_output_dir(spec.out, "pipeline out folder", inputs=[spec.path])
     out.mkdir(parents=True, exist_ok=True)
     with exclusive_lock(out / LOCK, "pipeline run", error=PipelineLockedError):
         try:
             return _run_locked(spec, scheduler=scheduler, progress=progress,
-                               n_workers=n_workers, client=client, t0=t0)
+                               n_workers=n_workers, client=client, shared_disk=shared_disk,
+                               t0=t0)
         except SweepLockedError as err:
             raise PipelineLockedError(str(err)) from None
 
 
-def _run_locked(spec, *, scheduler, progress, n_workers, client, t0):
+def _summary(spec, res, started, t0, records, sweep_figs, log: _Log) -> dict:
     out = spec.out
-    started = _now()
-    previous = _read_previous(out)
-    cmpdir, figdir = out / "compare", out / "figures"
-    _clean_tmp(cmpdir)
-    _clean_tmp(figdir)
-    res = sweep(spec.base, spec.axes, out, mode=spec.mode, client=client,
-                scheduler=scheduler or spec.scheduler,
-                n_workers=n_workers or spec.n_workers,
-                threads_per_worker=spec.threads_per_worker, retries=spec.retries,
-                progress=progress)
-    failed = [{"member": m.label, "digest": m.digest, "stage": "simulate", "error": m.error}
-              for m in res.failed]
-    written, up_to_date = [], []
-    records: dict[str, dict] = {}
-    done = {}
-    for m in res.members:
-        if m.status == "done":
-            done.setdefault(m.digest, m)
-    kinds = [k for k in spec.figures if k in MEMBER_FIGURES]
-    cmp_mod = plot_mod = None
-    # importlib, not "from . import compare": the package resolves that name lazily
-    if spec.reference is not None and done:
-        cmp_mod = importlib.import_module(__package__ + ".compare")
-    if (kinds or "sweep" in spec.figures) and done:
-        plot_mod = importlib.import_module(__package__ + ".plot")
-    from tqdm.auto import tqdm
-    for digest, m in tqdm(done.items(), desc="products", unit="member",
-                          disable=not progress or not done):
-        archive = out / m.file
-        rec = {}
-        if cmp_mod is not None:
-            product = cmpdir / f"{digest}.nc"
-            inputs = [archive] + ([spec.reference] if spec.reference != CLOSED_FORM else [])
-            if _fresh(product, inputs):
-                rec["compare"] = {"status": "up to date", "path": str(product)}
-                up_to_date.append(product)
-            else:
-                try:
-                    rec["compare"] = _compare_member(cmp_mod, str(archive), spec.reference,
-                                                     product)
-                    if rec["compare"]["status"] == "written":
-                        written.append(product)
-                except Exception as err:        # noqa: BLE001 - keep going, report
-                    rec["compare"] = {"status": "failed", "error": _one_line(err)}
-                    failed.append({"member": m.label, "digest": digest, "stage": "compare",
-                                   "error": _one_line(err)})
-        if kinds:
-            try:
-                from ..archive import open_archive
-                ds = open_archive(archive)
-                try:
-                    w, cur, na = _member_figures(plot_mod, ds, archive, figdir, digest,
-                                                 kinds)
-                finally:
-                    ds.close()
-                rec["figures"] = {"status": "written" if w else "up to date",
-                                  "paths": [str(p) for p in w + cur],
-                                  "not_applicable": na}
-                written.extend(w)
-                up_to_date.extend(cur)
-            except Exception as err:            # noqa: BLE001 - keep going, report
-                rec["figures"] = {"status": "failed", "error": _one_line(err)}
-                failed.append({"member": m.label, "digest": digest, "stage": "figures",
-                               "error": _one_line(err)})
-        records[digest] = rec
-    sweep_figs = {}
-    if "sweep" in spec.figures and done:
-        digests = sorted(done)
-        archives = [out / done[d].file for d in digests]
-        prev_sweep = previous.get("sweep_figures", {}) if isinstance(previous, dict) else {}
-        sw = None
-        try:
-            for var in spec.variables:
-                target = figdir / f"sweep-{var}.png"
-                prev = prev_sweep.get(var, {}) if isinstance(prev_sweep, dict) else {}
-                if prev.get("members") == digests and _fresh(target, archives):
-                    sweep_figs[var] = {"status": "up to date", "path": str(target),
-                                       "members": digests}
-                    up_to_date.append(target)
-                    continue
-                if sw is None:
-                    from .sweep import open_sweep
-                    sw = open_sweep(out, allow_missing=True)
-                x = "t_norm" if "t_norm" in sw.dims else "time"
-                try:
-                    with _atomic(target) as tmp:
-                        plot_mod.plot_sweep(sw, tmp, variable=var, x=x)
-                    sweep_figs[var] = {"status": "written", "path": str(target),
-                                       "members": digests}
-                    written.append(target)
-                except Exception as err:        # noqa: BLE001
-                    sweep_figs[var] = {"status": "failed", "error": _one_line(err)}
-                    failed.append({"member": "(sweep)", "digest": None,
-                                   "stage": "sweep-figure", "error": _one_line(err)})
-        except ArchiveError as err:
-            failed.append({"member": "(sweep)", "digest": None, "stage": "sweep-figure",
-                           "error": _one_line(err)})
-        finally:
-            if sw is not None:
-                sw.close()
     members = []
     for m in res.members:
         entry = m.to_json()
@@ -375,28 +372,56 @@ def _run_locked(spec, *, scheduler, progress, n_workers, client, t0):
         entry["archive"] = str(out / m.file)
         entry.update(records.get(m.digest, {}))
         members.append(entry)
-    summary = {
+    return {
         "name": spec.name,
         "pipeline": str(spec.path.resolve()),
         "out": str(out),
         "started": started,
         "finished": _now(),
         "wall_time_s": _time.perf_counter() - t0,
-        "ok": not failed,
+        "ok": not log.failed,
         "counts": {"members": len(res.members), "computed": len(res.computed),
                    "skipped": len(res.skipped), "failed": len(res.failed),
-                   "products_written": len(written), "products_up_to_date": len(up_to_date)},
+                   "products_written": len(log.written),
+                   "products_up_to_date": len(log.up_to_date)},
         "sweep": {"mode": spec.mode, "axes": res.manifest["axes"],
                   "dims": res.manifest["dims"], "manifest": str(out / "manifest.json")},
         "compare": {"reference": None if spec.reference is None else str(spec.reference)},
         "figures": list(spec.figures),
         "members": members,
         "sweep_figures": sweep_figs,
-        "failed": failed,
+        "failed": log.failed,
     }
+
+
+def _run_locked(spec, *, scheduler, progress, n_workers, client, shared_disk, t0):
+    out = spec.out
+    started = _now()
+    previous = _read_previous(out)
+    _clean_tmp(out / "compare")
+    _clean_tmp(out / "figures")
+    res = sweep(spec.base, spec.axes, out, mode=spec.mode, client=client,
+                scheduler=scheduler or spec.scheduler,
+                n_workers=n_workers or spec.n_workers,
+                threads_per_worker=spec.threads_per_worker, retries=spec.retries,
+                progress=progress, shared_disk=shared_disk)
+    log = _Log()
+    for m in res.failed:
+        log.fail(m.label, m.digest, "simulate", m.error or "failed")
+    done = {}
+    for m in res.members:
+        if m.status == "done":
+            done.setdefault(m.digest, m)
+    records = {}
+    for digest, m in tqdm(done.items(), desc="products", unit="member",
+                          disable=not progress or not done):
+        records[digest] = _member_products(spec, m, out, log)
+    sweep_figs = _sweep_figures(spec, out, done, previous, log) \
+        if "sweep" in spec.figures and done else {}
+    summary = _summary(spec, res, started, t0, records, sweep_figs, log)
     _write_json(out / SUMMARY, summary)
-    return PipelineResult(spec=spec, sweep=res, summary=summary, written=written,
-                          up_to_date=up_to_date, failed=failed)
+    return PipelineResult(spec=spec, sweep=res, summary=summary, written=log.written,
+                          up_to_date=log.up_to_date, failed=log.failed)
 
 
 # ------------------------------------------------------------------- command line
@@ -406,16 +431,23 @@ def add_arguments(parser) -> None:
                         help="pipeline file (see the description)")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="dask scheduler address or 'synchronous' (default: the file's "
-                             "[dask] scheduler, else a LocalCluster)")
+                             "[dask] scheduler, else a LocalCluster). Trusted: dask "
+                             "unpickles what the scheduler sends")
     parser.add_argument("--workers", type=int, default=None, metavar="N",
                         help="LocalCluster worker processes")
+    parser.add_argument("--shared-disk", action=argparse.BooleanOptionalAction,
+                        default=None,
+                        help="the sweep's workers write the archives into the out folder "
+                             "themselves, or send them back (default: in place on this "
+                             "machine, sent back from another cluster)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
 def main(args) -> int:
     try:
         res = run_pipeline(args.pipeline_file, scheduler=args.scheduler,
-                           n_workers=args.workers, progress=not args.no_progress)
+                           n_workers=args.workers, progress=not args.no_progress,
+                           shared_disk=args.shared_disk)
     except PipelineLockedError as err:
         print(f"contactpipe: {' '.join(str(err).split())}; nothing done", file=sys.stderr)
         return EXIT_LOCKED

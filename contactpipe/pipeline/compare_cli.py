@@ -1,0 +1,56 @@
+"""``contactpipe compare ARCHIVE.nc [REFERENCE.nc] [-o TABLE.nc|TABLE.csv] [--figure FIG.png]``
+
+Checks an archive against the closed form of its scene, or against a reference archive,
+prints the largest value of each error and when it occurs, and writes the error table
+(netCDF or CSV) and the profiles figure when asked. The table comes from
+:func:`contactpipe.pipeline.compare.compare`, the figure from
+:func:`contactpipe.pipeline.plot.plot_profiles` (the closed form or the reference in
+grey); every output path is checked before any work.
+"""
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+from ..exceptions import OutputPathError
+from ..files import check_output_dir, check_output_path
+from . import compare as compare_stage
+from .plot import plot_profiles, save_figure
+
+__all__ = ["add_arguments", "main"]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.description = f"{parser.description}\n\n{compare_stage.__doc__.strip()}"
+    parser.add_argument("archive", type=pathlib.Path, help="archive to check (netCDF)")
+    parser.add_argument("reference", type=pathlib.Path, nargs="?", default=None,
+                        help="reference archive (default: the scene's closed form)")
+    # str, not pathlib.Path: Path("") is "." and an empty -o must be refused, not the cwd
+    parser.add_argument("-o", "--output", default=None, metavar="TABLE",
+                        help="write the error table (TABLE.nc or TABLE.csv)")
+    parser.add_argument("--figure", default=None, metavar="FIG.png",
+                        help="write the profiles against the closed form/reference (PNG)")
+
+
+def _check_outputs(args) -> None:
+    inputs = [p for p in (args.archive, args.reference) if p is not None]
+    if args.output is not None:
+        compare_stage.check_table_path(args.output, inputs=inputs)
+    if args.figure is not None:
+        fig = check_output_path(args.figure, "figure", inputs=inputs)
+        check_output_dir(fig.parent, "folder of the figure")
+        if args.output is not None and fig.resolve() == pathlib.Path(args.output).resolve():
+            raise OutputPathError(f"figure {fig} is also the error table: give two names")
+
+
+def main(args) -> int:
+    _check_outputs(args)
+    table = compare_stage.compare(args.archive, args.reference, out=args.output)
+    print(compare_stage.format_table(table))
+    if args.output is not None:
+        print(f"wrote {args.output}")
+    if args.figure is not None:
+        fig = plot_profiles(args.archive, closed_form=args.reference is None,
+                            reference=args.reference)
+        print(f"wrote {save_figure(fig, args.figure)}")
+    return 0

@@ -1,0 +1,128 @@
+"""Derived sweep parameters: axes that are not a dotted scene path.
+
+A derived parameter is a function ``func(scene, value) -> Scene`` registered by name;
+the sweep applies it to every member (:mod:`contactpipe.pipeline.members`). Built in:
+
+``tau_ratio``
+    The load window tau = ``tau_ratio`` x the relaxation time of the first viscoelastic
+    body that has one (indenter first): ``relaxation_time`` of a Maxwell body (or of a
+    Prony body's dashpot), ``retardation_time`` of a Zener or Kelvin-Voigt body. The load
+    knots are stretched proportionally from ``time[0]`` (or ``load.fretting.window`` is
+    set), so the shape of the program and the number of steps stay the same.
+
+Users register their own with :func:`register_parameter`.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from typing import Callable
+
+from ..exceptions import SceneError
+
+__all__ = ["register_parameter", "derived_parameters", "registered", "relaxation_time",
+           "with_window", "tau_ratio"]
+
+_PARAMETERS: dict[str, Callable] = {}
+
+
+def register_parameter(name: str):
+    """Register a derived sweep parameter under ``name`` (a decorator).
+
+    The function is called as ``func(scene, value)`` and returns a new validated
+    :class:`~contactpipe.Scene` (typically ``scene.replace({...})``). Raise
+    :class:`~contactpipe.SceneError` (or ``ValueError``) for a value it cannot take; the
+    sweep reports it with the axis and value.
+
+    >>> from contactpipe.pipeline.sweep import register_parameter
+    >>> @register_parameter("load_scale")
+    ... def load_scale(scene, value):
+    ...     return scene.replace({"load.normal_force": value * scene.load.normal_force})
+    >>> cp.sweep(base, {"load_scale": [0.5, 1, 2]}, "runs/")
+
+    Names are global to the process that builds the sweep (the members' scenes are built
+    there; workers only receive finished scenes).
+    """
+    if not isinstance(name, str) or not name.isidentifier():
+        raise SceneError(f"a derived parameter name must be an identifier (no dots: "
+                         f"dotted names are scene paths), got {name!r}")
+
+    def decorate(func):
+        if not callable(func):
+            raise TypeError(f"register_parameter({name!r}) decorates a function "
+                            f"(scene, value) -> Scene, got {func!r}")
+        _PARAMETERS[name] = func
+        return func
+    return decorate
+
+
+def derived_parameters() -> dict[str, Callable]:
+    """The registered derived parameters, name -> function (a copy)."""
+    return dict(_PARAMETERS)
+
+
+def relaxation_time(scene) -> tuple[str, float]:
+    """(dotted key, value [s]) of the time ``tau_ratio`` refers to.
+
+    The first viscoelastic body (indenter, then half-space) with one: Maxwell
+    ``relaxation_time``, a Prony body's ``relaxation_time`` (its dashpot), Zener or
+    Kelvin-Voigt ``retardation_time``.
+
+    Raises
+    ------
+    SceneError
+        No body has such a time (elastic or rigid bodies, tabulated creep, Prony without
+        a dashpot).
+    """
+    seen = []
+    for key in ("indenter", "halfspace"):
+        body = getattr(scene, key)
+        if body.material != "viscoelastic":
+            seen.append(f"{key} is {body.material}")
+            continue
+        if body.creep in ("maxwell", "prony") and body.relaxation_time is not None:
+            return f"{key}.relaxation_time", float(body.relaxation_time)
+        if body.creep in ("zener", "kelvin_voigt") and body.retardation_time is not None:
+            return f"{key}.retardation_time", float(body.retardation_time)
+        seen.append(f"{key} is viscoelastic ({body.creep}) without a relaxation or "
+                    f"retardation time")
+    raise SceneError(f"no body has a relaxation or retardation time ({'; '.join(seen)}): "
+                     f"tau_ratio needs a Maxwell, Zener or Kelvin-Voigt body or a Prony "
+                     f"body with relaxation_time")
+
+
+def with_window(scene, window: float):
+    """The scene with its load program stretched to last ``window`` [s].
+
+    ``load.fretting.window`` is set for a fretting preset; otherwise every knot of
+    ``load.time`` moves proportionally away from ``time[0]``, which stays put.
+    """
+    window = float(window)
+    if not math.isfinite(window) or window <= 0:
+        raise SceneError(f"the load window must be a finite number > 0 [s], got {window:g}")
+    load = scene.load
+    if load.fretting is not None:
+        return scene.replace({"load.fretting.window": window})
+    t = [float(x) for x in load.time]
+    old = t[-1] - t[0]
+    if old <= 0:
+        raise SceneError(f"load.time = {t} has a single knot: there is no window to "
+                         f"stretch; give at least two knots")
+    new = [t[0] + (x - t[0]) * (window / old) for x in t]
+    new[-1] = t[0] + window
+    return scene.replace({"load.time": new})
+
+
+@register_parameter("tau_ratio")
+def tau_ratio(scene, value):
+    """Load window tau = ``value`` x the relaxation time (:func:`relaxation_time`)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not math.isfinite(float(value)) or float(value) <= 0:
+        raise SceneError(f"tau_ratio must be a finite number > 0, got {value!r}")
+    _, t_rel = relaxation_time(scene)
+    return with_window(scene, float(value) * t_rel)
+
+
+def registered(name: str) -> Callable | None:
+    """The function registered under ``name``, or None."""
+    return _PARAMETERS.get(name)
