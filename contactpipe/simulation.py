@@ -286,14 +286,29 @@ class _Problem:
             return replace(self.plan, tangential="none", coupling="none")
         return self.plan
 
-    def history(self, st, first):
-        """The known displacement U [m] from the bodies' history tractions."""
+    def history(self, st, k):
+        """The known displacement U [m] at instant ``k`` from the bodies' history tractions.
+
+        Raises
+        ------
+        SceneError
+            The history tractions overflow float64 (a creep function grown beyond any
+            representable traction over an absurd time span).
+        """
         U = np.zeros((3,) + self.shape)
-        if any(m is not None for m in st.memories) and not first:
-            h = [None if m is None else m.known() for m in st.memories]
+        if any(m is not None for m in st.memories) and k > 0:
             outputs = (1, 2, 3) if self.tang else (3,)
-            Uh = history_displacement(self.hist_kernels, h[0], h[1], self.conv,
-                                      outputs=outputs)
+            # an overflow here is harmless: it is refused just below, before any use
+            with np.errstate(over="ignore", invalid="ignore"):
+                h = [None if m is None else m.known() for m in st.memories]
+                Uh = history_displacement(self.hist_kernels, h[0], h[1], self.conv,
+                                          outputs=outputs)
+            if not np.isfinite(Uh).all():
+                raise SceneError(
+                    f"step {k} (t = {self.t[k]:.6g} s): the viscoelastic history overflows "
+                    f"float64 (the creep of a body over load.time up to {self.t[-1]:.3g} s "
+                    f"grows beyond any representable displacement); shorten load.time or "
+                    f"check the relaxation times")
             U[[o - 1 for o in outputs]] = Uh
         return U
 
@@ -334,7 +349,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
     first = k == 0
     op = pb.op_first if first else pb.op_next
     pairs0 = pb.conv.pairs
-    U = pb.history(st, first)
+    U = pb.history(st, k)
     T = np.array([pb.T1[k], pb.T2[k]])
     # the normal problem is unchanged from the previous instant: reuse its solution
     same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
