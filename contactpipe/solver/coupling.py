@@ -179,7 +179,9 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     -------
     InstantResult
         ``converged`` False with ``failed`` naming the sub-problem that stopped: "normal",
-        "tangential", or "coupling" (the passes did not settle in ``limits.max_passes``).
+        "tangential" (also when |T| > mu W (1 + tol): no shear within the bounds carries
+        it; ``residual`` is then (|T| - mu W) / (mu W)), or "coupling" (the passes did not
+        settle in ``limits.max_passes``).
     """
     s = _Instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits)
     tol = limits.tol
@@ -196,6 +198,11 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     p = n.p
     domega = np.zeros(2)
     t_res, up = None, None
+    excess = float(np.hypot(*s.T)) - mu * W
+    if s.tang != "none" and excess > tol * mu * W:
+        # no shear within the bounds mu p carries T: the contact slides as a whole
+        return InstantResult(p, q, U, n.omega3, domega, s.its, s.passes, False,
+                             excess / max(mu * W, 1e-300), "tangential", n)
 
     # -- tangential, and the coupling loop ------------------------------------------------
     if s.tang != "none" and op.rigid:
