@@ -31,7 +31,7 @@ __all__ = ["content_problems", "COULOMB_RTOL", "BLOCK_BYTES"]
 #: instant: float32 storage rounds p and q by 6e-8 each, the solvers project exactly.
 COULOMB_RTOL = 1e-6
 #: Default bound of the field data held at once by a scan [bytes].
-BLOCK_BYTES = 32 * 2**20
+BLOCK_BYTES = 16 * 2**20
 #: Variables that must not be negative.
 NON_NEGATIVE = {"p": "negative pressure", "h": "negative gap"}
 
