@@ -303,20 +303,21 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     the run minus the resident memory before it, one fresh process per run, pyFFTW, one
     thread (measured [MiB] / estimated [MiB]):
 
-    ====================================================  ===========  ===========
-    scene (steps; archive streamed unless "in memory")    128²         256²
-    ====================================================  ===========  ===========
-    rigid sphere on Maxwell, frictionless (10)            36 / 55      121 / 160
-    the same, 40 steps kept in memory                     60 / 108     238 / 287
-    rigid on Maxwell, fretting, coupled, one-component (8) 46 / 56     162 / 173
-    elastic pair, beta = 0, one-component (8)             40 / 54      135 / 165
-    steel on aluminium, vector form, coupled (4; 2)       39 / 54      132 / 158
-    ====================================================  ===========  ===========
+    ======================================================  =========  =========
+    scene (steps; the archive streamed unless "in memory")  128²       256²
+    ======================================================  =========  =========
+    rigid sphere on Maxwell, frictionless (10)              36 / 55    122 / 160
+    the same, 40 steps kept in memory                       60 / 108   242 / 287
+    rigid on Maxwell, fretting, coupled, one-component (8)  46 / 56    163 / 173
+    elastic pair, beta = 0, one-component (8)               40 / 54    136 / 165
+    steel on aluminium, vector, coupled (4; 2 at 256²)      42 / 54    132 / 158
+    ======================================================  =========  =========
 
-    and 413 / 495 MiB for the frictionless Maxwell run at 512² (4 steps). The estimate
-    stays above every measurement, by 7 % to 80 % (the most on small grids, where the fixed
-    allowances dominate); it grows as N1 x N2 (about 1.9 kB per cell for a viscoelastic
-    half-space: four sets of nine kernel spectra). The time is a floor, not a forecast:
+    and 415 / 495 MiB for the frictionless Maxwell run at 512² (4 steps); before each
+    run ru_maxrss equalled the resident memory (no earlier peak). The estimate
+    stays above every measurement, by 6 % to 80 % (the most on small grids, where the fixed
+    allowances dominate); it grows as N1 x N2 (for a viscoelastic half-space 1.7 kB per cell
+    measured at 512², 1.9 kB estimated: four sets of nine kernel spectra). The time is a floor, not a forecast:
     the FFT pairs of the speed table times the least time of one pair.
     """
     pl = plan_ if plan_ is not None else plan(scene)

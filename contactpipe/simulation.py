@@ -49,12 +49,15 @@ from .solver.operator import (ContactOperator, body_spectra, convolver, history_
                               history_kernels)
 
 __all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
-           "Interrupted", "signals_as_interrupt"]
+           "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
 
 #: Knots listed by the off-mesh warning; the others are counted.
 KNOTS_LISTED = 5
 #: A cell sticks while |q| < mu p (1 - STICK_MARGIN) (rounding of the projection).
 STICK_MARGIN = 1e-9
+#: Pressures [Pa] and displacements [m] a run may reach: their squares, summed over a
+#: grid, stay within float64 (about 1e-308 .. 1e308).
+SCALE_RANGE = (1e-150, 1e150)
 
 
 class ResumeLockedError(LockedError):
@@ -73,15 +76,21 @@ class Interrupted(KeyboardInterrupt):
         self.signum = int(signum)
 
 
+#: Termination signals received while :func:`signals_as_interrupt` is active.
+_RECEIVED: list = []
+
+
 @contextlib.contextmanager
 def signals_as_interrupt(names=("SIGTERM", "SIGHUP"), only_default: bool = False):
     """Inside, the termination signals raise :class:`Interrupted` in the main thread.
 
     A run then cleans up as on Ctrl-C: temporary files removed, the part file and
     checkpoint of a resumable run kept. A second such signal during the clean-up is
-    ignored. Outside the main thread (dask workers) nothing is installed; with
-    ``only_default`` only signals still at their default action are taken over (the
-    library's own use, so that an application's handlers win).
+    ignored. The march also checks after every instant (:func:`raise_if_signalled`), so a
+    signal whose exception was swallowed (it came while a finalizer ran, where Python only
+    prints exceptions) still ends the run. Outside the main thread (dask workers)
+    nothing is installed; with ``only_default`` only signals still at their default
+    action are taken over (the library's own use, so that an application's handlers win).
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -89,6 +98,7 @@ def signals_as_interrupt(names=("SIGTERM", "SIGHUP"), only_default: bool = False
 
     def handler(signum, frame):
         signal.signal(signum, signal.SIG_IGN)      # the clean-up is not interrupted again
+        _RECEIVED.append(signum)
         raise Interrupted(signum)
 
     previous = {}
@@ -102,6 +112,14 @@ def signals_as_interrupt(names=("SIGTERM", "SIGHUP"), only_default: bool = False
     finally:
         for signum, old in previous.items():
             signal.signal(signum, old)
+            while signum in _RECEIVED:
+                _RECEIVED.remove(signum)
+
+
+def raise_if_signalled() -> None:
+    """Raise :class:`Interrupted` for a termination signal received (and not yet acted on)."""
+    if _RECEIVED:
+        raise Interrupted(_RECEIVED[0])
 
 
 def grid_coordinates(scene):
@@ -259,18 +277,34 @@ class _Problem:
         return w
 
     def _check_finite(self, d1, d2):
-        """Refuse constants whose influence coefficients float64 cannot hold."""
+        """Refuse constants whose influence coefficients float64 cannot hold, or whose
+        pressures and displacements it cannot square (the solvers' inner products)."""
         kernels = [op.k for op in (self.op_first, self.op_next) if not op.rigid]
         kernels += [k for k in self.hist_kernels if k is not None]
-        if all(np.isfinite(v).all() for k in kernels for v in k.values()):
-            return
         sc = self.scene
-        raise SceneError(
-            f"the influence coefficients overflow float64 (indenter: {sc.indenter.material}"
-            f"{_young(sc.indenter)}, halfspace: {sc.halfspace.material}{_young(sc.halfspace)}, "
-            f"cells {d1:.3g} x {d2:.3g} m, creep weights {self.op_next.w1:.3g}, "
-            f"{self.op_next.w2:.3g} over load.time up to {self.t[-1]:.3g} s): the moduli, "
-            f"relaxation times or time span are beyond what a computation can hold")
+        where = (f"indenter: {sc.indenter.material}{_young(sc.indenter)}, halfspace: "
+                 f"{sc.halfspace.material}{_young(sc.halfspace)}, cells {d1:.3g} x {d2:.3g} m, "
+                 f"creep weights {self.op_next.w1:.3g}, {self.op_next.w2:.3g} with steps of "
+                 f"{self.dt:.3g} s")
+        if not all(np.isfinite(v).all() for k in kernels for v in k.values()):
+            raise SceneError(
+                f"the influence coefficients overflow float64 ({where}): the moduli, "
+                f"relaxation times or time span are beyond what a computation can hold")
+        p_star = float(np.max(np.abs(self.W))) / self.cell
+        if p_star == 0.0:
+            return
+        for op in (self.op_first, self.op_next):
+            if op.rigid:
+                continue
+            u_star = abs(op.self_influence("33")) * p_star
+            if not (SCALE_RANGE[0] <= p_star <= SCALE_RANGE[1]
+                    and SCALE_RANGE[0] <= u_star <= SCALE_RANGE[1]):
+                raise SceneError(
+                    f"the scene's scales are beyond float64: the normal force on one cell, "
+                    f"{p_star:.3g} Pa, moves it by {u_star:.3g} m ({where}); the solvers "
+                    f"square pressures and displacements, so both must lie within "
+                    f"{SCALE_RANGE[0]:g} .. {SCALE_RANGE[1]:g}: check the moduli, the "
+                    f"relaxation times, load.normal_force and the grid")
 
     def fractions(self, first, T):
         """The sub-steps of an instant: those of a frictional preload at t0, else one."""
@@ -520,6 +554,7 @@ def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds,
     last_ckpt = _time.perf_counter()
     try:
         for k in range(st.k + 1, pb.t.size):
+            raise_if_signalled()
             record = _step(pb, st, k)
             if k % stride == 0 or k == last:
                 writer.append(pb.t[k], record)
