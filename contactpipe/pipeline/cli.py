@@ -33,7 +33,8 @@ from .._version import __version__
 from ..exceptions import (ArchiveError, ContactpipeError, OutputPathError, SceneError,
                           one_line)
 from ..files import LockedError, check_output_path
-from ..simulation import signals_as_interrupt
+from ..scene import Scene
+from ..simulation import signals_as_interrupt, simulate
 
 __all__ = ["main", "build_parser"]
 
@@ -68,9 +69,6 @@ def _add_run(sub):
 
 
 def _run(args) -> int:
-    # the stages are imported on use: `contactpipe --help` stays fast
-    from ..scene import Scene
-    from ..simulation import simulate
     scene = Scene.from_toml(args.scene)
     inputs = [args.scene, getattr(scene.geometry, "file", None)]
     output = check_output_path(args.output, "archive (-o)", inputs=inputs)
@@ -92,7 +90,7 @@ def _run(args) -> int:
     print(f"wrote {output} ({ds.sizes['time']} instants, {ds.attrs['models']}, "
           f"{float(ds.attrs['wall_time_s']):.2f} s)")
     if figure is not None:
-        from .plot import plot_profiles
+        from .plot import plot_profiles    # matplotlib: imported only when a figure is asked
         figure.parent.mkdir(parents=True, exist_ok=True)
         plot_profiles(ds, figure)
         print(f"wrote {figure}")
