@@ -8,6 +8,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -49,7 +50,9 @@ def test_kill_and_resume(tmp_path):
         k_done = int(z["k"])
     assert 0 < k_done < 200
     scene = cp.Scene.from_toml(scene_file)
-    resumed = cp.simulate(scene, target, resume=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ResumeWarning)     # resumed, not started afresh
+        resumed = cp.simulate(scene, target, resume=True)
     assert not ckpt.exists() and not part.exists()
     reference = cp.simulate(scene)
     assert resumed.sizes["time"] == 201

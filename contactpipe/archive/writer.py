@@ -10,10 +10,13 @@ which also verifies the checksums), setting ``complete = "true"`` and an fsync. 
 garbage-collected unclosed, the temporary file is removed; a resumable writer may instead
 :meth:`~ArchiveWriter.suspend` (keep its part file for a later resume).
 
-Layout on disk: ``time`` unlimited; fields chunked (1, N1, N2), series in chunks of
-``SERIES_CHUNK`` steps; every variable, coordinates included, with a fletcher32 checksum
-per chunk; zlib level 1 with shuffle when compressed; no fill values; floats in float64 or
-float32 (the precision), ``status`` int8, counts int32, coordinates always float64.
+Layout on disk: ``time`` unlimited; fields chunked (1, N1, N2), zlib level 1 with shuffle
+when compressed; series in uncompressed chunks of ``SERIES_CHUNK`` steps (a few bytes per
+instant: a series chunk is rewritten at every flush, and uncompressed it keeps its size
+and place, so a part file killed between two flushes still matches its checkpoint); every
+variable, coordinates included, with a fletcher32 checksum per chunk; no fill values;
+floats in float64 or float32 (the precision), ``status`` int8, counts int32, coordinates
+always float64.
 """
 from __future__ import annotations
 
@@ -229,7 +232,7 @@ class ArchiveWriter(_StepWriter):
     precision : {"float64", "float32"}
         Storage type of the floating-point variables (coordinates stay float64).
     compress : bool
-        zlib (level 1) with shuffle on every variable.
+        zlib (level 1) with shuffle on every field (series stay uncompressed).
     resumable : bool
         Write to the fixed part file ``.NAME.resumable.part`` (:func:`resumable_part`),
         which :meth:`suspend` keeps for a later run.
@@ -336,12 +339,13 @@ class ArchiveWriter(_StepWriter):
         field_chunks = (1, self.x1.size, self.x2.size)
         for name, dtype in self._dtypes.items():
             dims = VARIABLES[name]["dims"]
-            chunks = field_chunks if dims == FIELD else (SERIES_CHUNK,)
-            v = nc.createVariable(name, dtype, dims, fill_value=False, chunksizes=chunks,
-                                  fletcher32=True, **zip_)
+            field = dims == FIELD
+            v = nc.createVariable(name, dtype, dims, fill_value=False,
+                                  chunksizes=field_chunks if field else (SERIES_CHUNK,),
+                                  fletcher32=True, **(zip_ if field else {"compression": None}))
             # each chunk is written once: cache one (not the library's 64 MiB per variable),
             # so memory stays flat however many steps are written
-            v.set_var_chunk_cache(size=int(np.prod(chunks)) * dtype.itemsize, nelems=7,
+            v.set_var_chunk_cache(size=int(np.prod(v.chunking())) * dtype.itemsize, nelems=7,
                                   preemption=1.0)
             v.setncatts(cf_attrs(name))
         nc.setncatts(self.attrs)
@@ -497,9 +501,11 @@ def _encoding(ds: xr.Dataset, prec, compress: bool) -> dict:
             entry = VARIABLES[name]
             enc["dtype"] = (prec or v.dtype) if entry["dtype"] == "float" \
                 else np.dtype(entry["dtype"])
-            enc["chunksizes"] = (1, ds.sizes["x1"], ds.sizes["x2"]) \
-                if entry["dims"] == FIELD else (SERIES_CHUNK,)
-            enc.update(zip_)
+            if entry["dims"] == FIELD:
+                enc["chunksizes"] = (1, ds.sizes["x1"], ds.sizes["x2"])
+                enc.update(zip_)
+            else:
+                enc.update(chunksizes=(SERIES_CHUNK,), zlib=False)
         elif name == "time":
             enc["chunksizes"] = (SERIES_CHUNK,)
         encoding[name] = enc
@@ -519,7 +525,7 @@ def save(ds: xr.Dataset, path, precision=None, compress=True) -> pathlib.Path:
     precision : {None, "float64", "float32"}
         Storage type of floating-point variables; None keeps each variable's own.
     compress : bool
-        zlib level 1 with shuffle.
+        zlib level 1 with shuffle on the fields (series stay uncompressed).
 
     Returns
     -------
