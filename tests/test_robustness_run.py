@@ -58,10 +58,11 @@ def scene_file(tmp_path):
 
 @pytest.fixture
 def no_work(monkeypatch):
-    """Fail the test if a run gets as far as marching (a path check came too late)."""
+    """Fail the test if a run gets past its path check (the first work it does after the
+    check is resolving the accuracy preset)."""
     def refuse(*args, **kwargs):
         raise AssertionError("the run started although its output path is refused")
-    monkeypatch.setattr(simulation, "_march", refuse)
+    monkeypatch.setattr(simulation, "resolve_accuracy", refuse)
 
 
 # --------------------------------------------------------------------------- output paths
