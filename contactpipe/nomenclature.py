@@ -17,7 +17,14 @@ dtype : str
     integer type (``"int8"``, ``"int32"``).
 required : bool
     In every archive. The others appear only when the scene needs them (frictional
-    contact, tangential load), as ``tools/check_contract.py`` expects.
+    contact, tangential load).
+model : str
+    The plan slot whose model writes the variable: ``"tangential"`` for the shear, slip
+    and in-plane outputs (present whenever the archive's ``model_tangential`` is not
+    ``"none"``), absent for the required ones.
+diagnostic : bool
+    A solver diagnostic (work spent, passes): written by :func:`contactpipe.simulate`,
+    never compared between archives, optional in archives of other origin.
 flag_values, flag_meanings
     CF flags, ``status`` only.
 """
@@ -26,7 +33,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["FIELD", "SERIES", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS", "REQUIRED_ATTRS",
-           "CONVENTIONS", "STATUS_SEPARATED", "STATUS_STICK", "STATUS_SLIP", "cf_attrs"]
+           "CONVENTIONS", "TANGENTIAL", "STATUS_SEPARATED", "STATUS_STICK", "STATUS_SLIP", "cf_attrs",
+           "variables_for"]
 
 FIELD = ("time", "x1", "x2")
 SERIES = ("time",)
@@ -34,6 +42,8 @@ SERIES = ("time",)
 CONVENTIONS = "CF-1.10"
 
 STATUS_SEPARATED, STATUS_STICK, STATUS_SLIP = 0, 1, 2
+#: The ``model`` of the variables a tangential model writes.
+TANGENTIAL = "tangential"
 
 
 def _v(dims, units, long_name, dtype="float", required=False, **extra):
@@ -44,35 +54,40 @@ def _v(dims, units, long_name, dtype="float", required=False, **extra):
 VARIABLES: dict[str, dict] = {
     # fields over the contact grid
     "p": _v(FIELD, "Pa", "contact pressure", required=True),
-    "q1": _v(FIELD, "Pa", "shear traction along x1"),
-    "q2": _v(FIELD, "Pa", "shear traction along x2"),
-    "u1": _v(FIELD, "m", "relative surface displacement along x1"),
-    "u2": _v(FIELD, "m", "relative surface displacement along x2"),
+    "q1": _v(FIELD, "Pa", "shear traction along x1", model=TANGENTIAL),
+    "q2": _v(FIELD, "Pa", "shear traction along x2", model=TANGENTIAL),
+    "u1": _v(FIELD, "m", "relative surface displacement along x1", model=TANGENTIAL),
+    "u2": _v(FIELD, "m", "relative surface displacement along x2", model=TANGENTIAL),
     "u3": _v(FIELD, "m", "relative normal surface displacement (> 0 opens the gap)",
              required=True),
     "h": _v(FIELD, "m", "gap", required=True),
-    "s1": _v(FIELD, "m", "accumulated slip of body 1 relative to body 2 along x1"),
-    "s2": _v(FIELD, "m", "accumulated slip of body 1 relative to body 2 along x2"),
+    "s1": _v(FIELD, "m", "accumulated slip of body 1 relative to body 2 along x1",
+             model=TANGENTIAL),
+    "s2": _v(FIELD, "m", "accumulated slip of body 1 relative to body 2 along x2",
+             model=TANGENTIAL),
     "status": _v(FIELD, "1", "contact status", dtype="int8", required=True,
                  flag_values=(STATUS_SEPARATED, STATUS_STICK, STATUS_SLIP),
                  flag_meanings="separated stick slip"),
     # time series
     "W": _v(SERIES, "N", "normal force", required=True),
-    "T1": _v(SERIES, "N", "tangential force along x1"),
-    "T2": _v(SERIES, "N", "tangential force along x2"),
-    "omega1": _v(SERIES, "m", "rigid-body displacement of body 1 relative to body 2 along x1"),
-    "omega2": _v(SERIES, "m", "rigid-body displacement of body 1 relative to body 2 along x2"),
+    "T1": _v(SERIES, "N", "tangential force along x1", model=TANGENTIAL),
+    "T2": _v(SERIES, "N", "tangential force along x2", model=TANGENTIAL),
+    "omega1": _v(SERIES, "m", "rigid-body displacement of body 1 relative to body 2 along x1",
+                 model=TANGENTIAL),
+    "omega2": _v(SERIES, "m", "rigid-body displacement of body 1 relative to body 2 along x2",
+                 model=TANGENTIAL),
     "omega3": _v(SERIES, "m", "normal approach of body 1 towards body 2 (> 0 presses)",
                  required=True),
     "contact_area": _v(SERIES, "m2", "contact area", required=True),
-    "stick_area": _v(SERIES, "m2", "stick area"),
-    "dissipation": _v(SERIES, "J", "frictional energy dissipated so far"),
+    "stick_area": _v(SERIES, "m2", "stick area", model=TANGENTIAL),
+    "dissipation": _v(SERIES, "J", "frictional energy dissipated so far", model=TANGENTIAL),
     "iterations": _v(SERIES, "1", "solver iterations spent on that step (inner, all loops)",
                      dtype="int32", required=True),
     # solver diagnostics
-    "coupling_passes": _v(SERIES, "1", "normal-tangential passes at that step", dtype="int32"),
+    "coupling_passes": _v(SERIES, "1", "normal-tangential passes at that step", dtype="int32",
+                          model=TANGENTIAL, diagnostic=True),
     "fft_pairs": _v(SERIES, "1", "forward+inverse padded FFT pairs spent on that step",
-                    dtype="int32"),
+                    dtype="int32", diagnostic=True),
 }
 
 COORDINATES: dict[str, dict] = {
@@ -95,6 +110,26 @@ GLOBAL_ATTRS: dict[str, str] = {
 REQUIRED_ATTRS = ("Conventions", "contactpipe_version", "scene", "models", "wall_time_s")
 
 _ATTR_KEYS = ("units", "long_name", "flag_values", "flag_meanings")
+
+
+def variables_for(tangential: bool, diagnostics: bool = True) -> list[str]:
+    """The variables of an archive, fields first, in the order of :data:`VARIABLES`.
+
+    Parameters
+    ----------
+    tangential : bool
+        A tangential model ran: its outputs (``model = "tangential"``) are included.
+    diagnostics : bool
+        Include the solver diagnostics (``coupling_passes`` only with ``tangential``).
+    """
+    def wanted(entry):
+        if entry.get("model") == TANGENTIAL and not tangential:
+            return False
+        return diagnostics or not entry.get("diagnostic", False)
+
+    names = [n for n, e in VARIABLES.items() if wanted(e)]
+    return ([n for n in names if VARIABLES[n]["dims"] == FIELD]
+            + [n for n in names if VARIABLES[n]["dims"] == SERIES])
 
 
 def cf_attrs(name: str) -> dict:

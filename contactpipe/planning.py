@@ -24,14 +24,23 @@ shear that the coupling induces (Spence's radial shear during indentation); ask 
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+import math
+import re
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+try:
+    import resource                      # Unix only
+except ImportError:  # pragma: no cover - Windows: no RLIMIT_AS to respect
+    resource = None
+
 from .exceptions import SceneError
 from .materials import ExponentialCreep
+from .nomenclature import FIELD, VARIABLES, variables_for
 
-__all__ = ["Plan", "plan", "pair_couples", "RULES"]
+__all__ = ["Plan", "plan", "pair_couples", "RULES", "Resources", "estimate_resources",
+           "available_memory", "check_resources"]
 
 RULES = {
     "normal": ("polonsky_keer",),
@@ -137,3 +146,301 @@ def plan(scene, tangential=None, coupling=None) -> Plan:
         mem = "recursive" if all(isinstance(c, ExponentialCreep) for c in creeps) else "direct"
     return Plan(tangential=tang, coupling=coup, memory=mem,
                 time_rule=scene.solver.time_rule, preload=scene.load.preload)
+
+
+# --------------------------------------------------------------------------- resources
+#
+# Memory model of one run on an N1 x N2 grid (N = N1 N2 cells), in bytes, with the DC-FFT
+# padded grid of 4N reals (R = 32 N bytes) and its half spectrum of 2 N1 (N2 + 1) complex
+# values (S ~ 32 N bytes):
+#   kernel spectra     9 S per compliant body (cached for the process)
+#   kernel set-up      9 R of padded kernels + their quadrant, while the spectra are made
+#   operators          9 S for the first instant's operator, 9 S for the others', 9 S per
+#                      body with a history (signed kernels)
+#   FFT buffers        2 R + 3 S (pyFFTW in/out, scratch) + 4 S inside a matrix product
+#   memory fields      per viscoelastic body: (2 + n_tau) 3N floats (recursion) plus 3 x 3N
+#                      of temporaries, or (steps + 2) 3N floats (direct sum of increments)
+#   per-step arrays    WORKING[tangential] N floats: the state (p, q, u, s), the solvers'
+#                      vectors and the record of the instant
+#   output             streamed: one chunk per variable and the read-back check's block;
+#                      in memory: every instant kept, then stacked (twice)
+# The set-up's padded kernels are freed before the operators are formed, so the peak is
+# the spectra plus the larger of the set-up and everything else. WORKING and BASE_BYTES
+# were calibrated on the peak resident memory of real runs (see estimate_resources).
+
+#: Floats per cell of the per-step working arrays, by tangential model.
+WORKING = {"none": 25, "scalar": 45, "vector": 70}
+#: Fixed allowance for the allocator, FFTW plans and library buffers [bytes].
+BASE_BYTES = 16 * 2**20
+#: Field data the archive's read-back check holds at once [bytes]
+#: (:data:`contactpipe.archive.content.BLOCK_BYTES`).
+CHECK_BYTES = 16 * 2**20
+#: Lower bound of the time of one FFT pair, per padded point and log2 of the points [s]
+#: (pyFFTW, one thread: 0.44 ms at 128², 1.6 ms at 256², 10.6 ms at 512² on the 2-core
+#: machine of the README's speed table; the least of the three, 3.4e-10, is the floor).
+FFT_FLOOR_S = 3.4e-10
+#: FFT pairs of one instant, per fourth root of N, by model: from the speed table
+#: (normal solve 40 / 59 / 82 / 130 pairs at 64² ... 512²: about 5 N^(1/4); a one-component
+#: fretting step about as many; the vector form four times; a coupled pass pair six times).
+PAIRS_PER_ROOT = {"none": 5.0, "scalar": 5.0, "vector": 20.0}
+COUPLING_PASSES = 6
+
+
+@dataclass(frozen=True)
+class Resources:
+    """What a run is estimated to need, before anything is allocated.
+
+    Attributes
+    ----------
+    memory_bytes : int
+        Peak memory beyond what the process holds before the run [bytes].
+    parts : dict
+        The same, by item (kernel spectra, operators, FFT buffers, memory fields,
+        per-step arrays, output) [bytes].
+    fft_pairs : float
+        Estimated FFT pairs of the whole run (an order of magnitude).
+    seconds : float
+        ``fft_pairs`` times the floor time of one FFT pair on the padded grid [s]: a
+        lower bound of the wall time.
+    grid : tuple of int
+        (N1, N2) the estimate is for.
+    instants : int
+        Instants the run computes.
+    """
+
+    memory_bytes: int
+    parts: dict = field(default_factory=dict)
+    fft_pairs: float = 0.0
+    seconds: float = 0.0
+    grid: tuple = (0, 0)
+    instants: int = 0
+
+    def describe(self) -> str:
+        """One line: the total and its three largest items."""
+        top = sorted(self.parts.items(), key=lambda kv: -kv[1])[:3]
+        items = ", ".join(f"{k} {_fmt_bytes(v)}" for k, v in top)
+        return (f"{_fmt_bytes(self.memory_bytes)} ({items}) and at least "
+                f"{_fmt_seconds(self.seconds)} for {self.instants} instants on "
+                f"{self.grid[0]}x{self.grid[1]} cells")
+
+
+def _fmt_bytes(n) -> str:
+    n = float(n)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024 or unit == "TiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} TiB"
+
+
+def _fmt_seconds(s) -> str:
+    if s < 120:
+        return f"{s:.2g} s"
+    if s < 7200:
+        return f"{s / 60:.3g} min"
+    if s < 172800:
+        return f"{s / 3600:.3g} h"
+    return f"{s / 86400:.3g} days"
+
+
+def _instants(scene) -> int:
+    steps = scene.time.steps if scene.time.steps is not None else \
+        len(scene.load.knots()[0]) - 1
+    return int(steps) + 1
+
+
+def _memory_fields(bodies, memory, instants, n) -> int:
+    """Bytes of the viscoelastic memories."""
+    if memory == "none":
+        return 0
+    total = 0
+    for b in bodies:
+        if not b.has_memory:
+            continue
+        if isinstance(b.creep, ExponentialCreep):
+            total += (2 + len(b.creep.tau) + 3) * 3 * n * 8
+        else:
+            total += (instants + 2) * 3 * n * 8
+    return total
+
+
+def _output_bytes(scene, tangential, instants, n, in_memory) -> int:
+    """Bytes of the output: the instants kept in memory (twice: kept, then stacked), or
+    one chunk per variable and the read-back check's blocks of a streamed archive."""
+    names = variables_for(tangential)
+    fields = [v for v in names if VARIABLES[v]["dims"] == FIELD]
+    size = np.dtype(scene.output.precision).itemsize
+    per_instant = sum(n * (1 if VARIABLES[v]["dtype"] == "int8" else size) for v in fields)
+    stride = int(scene.output.stride)
+    kept = (instants - 1) // stride + 1 + (1 if (instants - 1) % stride else 0)
+    check = 2 * min(CHECK_BYTES, kept * 4 * 8 * n)       # blocks and temporaries
+    if in_memory:
+        return 2 * kept * per_instant + check
+    return per_instant + check
+
+
+def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
+    """Memory and time a run of ``scene`` needs, computed from the grid, the plan and the
+    instants alone (nothing is allocated).
+
+    Parameters
+    ----------
+    scene : Scene
+        With its grid and steps resolved (after :func:`contactpipe.accuracy.resolve_accuracy`).
+    plan_ : Plan, optional
+        The plan (:func:`plan` of the scene otherwise).
+    in_memory : bool
+        The result is kept in memory (no archive path): every instant counts.
+
+    Returns
+    -------
+    Resources
+
+    Notes
+    -----
+    The memory model (comments above :data:`WORKING`) was calibrated on the peak
+    resident memory of real runs: ``resource.getrusage(RUSAGE_SELF).ru_maxrss`` after
+    the run minus the resident memory before it, one fresh process per run, pyFFTW, one
+    thread (measured [MiB] / estimated [MiB]):
+
+    ======================================================  =========  =========
+    scene (steps; the archive streamed unless "in memory")  128²       256²
+    ======================================================  =========  =========
+    rigid sphere on Maxwell, frictionless (10)              36 / 55    122 / 160
+    the same, 40 steps kept in memory                       60 / 108   242 / 287
+    rigid on Maxwell, fretting, coupled, one-component (8)  46 / 56    163 / 173
+    elastic pair, beta = 0, one-component (8)               40 / 54    136 / 165
+    steel on aluminium, vector, coupled (4; 2 at 256²)      42 / 54    132 / 158
+    ======================================================  =========  =========
+
+    and 415 / 495 MiB for the frictionless Maxwell run at 512² (4 steps); before each
+    run ru_maxrss equalled the resident memory (no earlier peak). The estimate
+    stays above every measurement, by 6 % to 80 % (the most on small grids, where the fixed
+    allowances dominate); it grows as N1 x N2 (for a viscoelastic half-space 1.7 kB per cell
+    measured at 512², 1.9 kB estimated: four sets of nine kernel spectra). The time is a floor, not a forecast:
+    the FFT pairs of the speed table times the least time of one pair.
+    """
+    pl = plan_ if plan_ is not None else plan(scene)
+    n1, n2 = (int(v) for v in scene.grid.points)
+    n = n1 * n2
+    R = 4 * n * 8
+    S = 2 * n1 * (n2 + 1) * 16
+    bodies = (scene.indenter.body(), scene.halfspace.body())
+    compliant = sum(not b.rigid for b in bodies)
+    histories = sum(b.has_memory for b in bodies) if pl.memory != "none" else 0
+    instants = _instants(scene)
+    tangential = pl.tangential != "none"
+    parts = {
+        "kernel spectra": 9 * S * compliant,
+        "kernel set-up": 9 * R + 2 * 9 * n * 8,
+        "operators": 9 * S * ((2 if instants > 1 else 1) + histories),
+        "FFT buffers": 2 * R + 7 * S,
+        "memory fields": _memory_fields(bodies, pl.memory, instants, n),
+        "per-step arrays": WORKING[pl.tangential] * n * 8,
+        "output": _output_bytes(scene, tangential, instants, n, in_memory),
+        "base": BASE_BYTES,
+    }
+    per_instant = PAIRS_PER_ROOT[pl.tangential] * n ** 0.25 * \
+        (COUPLING_PASSES if pl.coupling != "none" else 1)
+    substeps = int(scene.solver.preload_substeps) if tangential else 1
+    pairs = per_instant * (instants - 1 + substeps)
+    m = 4 * n
+    # the padded kernels of the set-up are freed before the operators are formed
+    peak = parts["kernel spectra"] + parts["base"] + max(
+        parts["kernel set-up"], sum(v for k, v in parts.items()
+                                    if k not in ("kernel spectra", "kernel set-up", "base")))
+    return Resources(memory_bytes=int(peak), parts=parts, fft_pairs=pairs,
+                     seconds=pairs * FFT_FLOOR_S * m * math.log2(max(m, 2)), grid=(n1, n2),
+                     instants=instants)
+
+
+def _meminfo_available() -> int | None:
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def _address_space_left() -> int | None:
+    """RLIMIT_AS minus the address space the process already maps (Unix)."""
+    if resource is None:
+        return None
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft == resource.RLIM_INFINITY:
+        return None
+    used = 0
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            m = re.search(r"^VmSize:\s+(\d+) kB", f.read(), re.M)
+            used = int(m.group(1)) * 1024 if m else 0
+    except OSError:
+        pass
+    return max(soft - used, 0)
+
+
+def _cgroup_left() -> int | None:
+    """The container's memory limit minus its usage (cgroup v2, then v1)."""
+    for limit, usage in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                         ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                          "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        try:
+            with open(limit, encoding="ascii") as f:
+                text = f.read().strip()
+            if text == "max":
+                return None
+            with open(usage, encoding="ascii") as f:
+                used = int(f.read().strip())
+            lim = int(text)
+            return None if lim >= 2**60 else max(lim - used, 0)
+        except (OSError, ValueError):
+            continue
+    return None
+
+
+def available_memory() -> tuple[int | None, str]:
+    """(bytes, source): the least of the free RAM (MemAvailable), the address space left
+    under RLIMIT_AS and the container's memory left (cgroup); (None, "") when none of
+    them can be read (then nothing is refused)."""
+    found = [(v, what) for v, what in ((_meminfo_available(), "available RAM"),
+                                       (_address_space_left(), "address space left under "
+                                                               "RLIMIT_AS"),
+                                       (_cgroup_left(), "memory left to the container"))
+             if v is not None]
+    if not found:
+        return None, ""
+    return min(found)
+
+
+def check_resources(res: Resources, available: int | None = None) -> Resources:
+    """Refuse a run whose memory estimate exceeds the memory available.
+
+    Parameters
+    ----------
+    res : Resources
+        From :func:`estimate_resources`.
+    available : int, optional
+        Bytes available; :func:`available_memory` when not given.
+
+    Raises
+    ------
+    SceneError
+        One line naming the estimate, the limit and what to change.
+    """
+    source = "given limit"
+    if available is None:
+        available, source = available_memory()
+    if available is None or res.memory_bytes <= available:
+        return res
+    fix = ["fewer grid.points (memory grows with N1 x N2)"]
+    if res.parts.get("output", 0) > res.memory_bytes / 3:
+        fix.insert(0, "write the result to a file, a larger output.stride or "
+                      "output.precision = 'float32'")
+    if res.parts.get("memory fields", 0) > res.memory_bytes / 3:
+        fix.append("a creep law of exponentials (its memory does not grow with the steps)")
+    raise SceneError(f"the run needs about {res.describe()}, but only "
+                     f"{_fmt_bytes(available)} is available ({source}); use "
+                     + " or ".join(fix))

@@ -1,6 +1,7 @@
 """The outer loop (paper §4): march the coupled contact through the temporal mesh.
 
-At every instant t_k of the uniform mesh:
+At every instant t_k of the uniform mesh (:func:`_step`, from the :class:`State` the
+previous instant left):
 
 1. the viscoelastic history of each body (its Boltzmann sum, :mod:`contactpipe.solver.memory`)
    gives a known relative displacement, one spatial convolution per body and step;
@@ -15,29 +16,110 @@ load is applied — for a coupled pair this produces shear and slip during inden
 (Spence's effect), resolved in ``solver.preload_substeps`` proportional sub-steps of the
 instantaneous (glassy) response; with ``"frictionless"`` the first instant is the paper's
 initial frictionless normal solve (outer loop, step 1).
+
+Before anything is allocated, :func:`simulate` checks the output path
+(:func:`contactpipe.files.check_output_path`) and the memory the run needs
+(:func:`contactpipe.planning.estimate_resources`). A resumable run holds a lock on its
+target's resume state (:func:`contactpipe.archive.resume_lock`) and checkpoints beside the
+archive writers (:class:`contactpipe.archive.Checkpoint`).
 """
 from __future__ import annotations
 
+import contextlib
+import signal
+import threading
 import time as _time
+import warnings
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .solver.coupling import solve_instant
-from .exceptions import ConvergenceError, GridError, GrossSlidingError
-from .files import atomic_path
-from .accuracy import resolve_accuracy
+from .accuracy import knot_multiple, resolve_accuracy
+from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
+from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
+                         OutputPathError, SceneError, one_line)
+from .files import LockedError, check_output_path, exclusive_lock
+from .materials import dundurs_beta
+from .nomenclature import variables_for
+from .planning import check_resources, estimate_resources, plan as make_plan
+from .solver.coupling import Previous, Tolerances, solve_instant
 from .solver.memory import make_memory
+from .solver.normal import NormalResult
 from .solver.operator import (ContactOperator, body_spectra, convolver, history_displacement,
-                       history_kernels)
-from .planning import plan as make_plan
+                              history_kernels)
 
-__all__ = ["simulate", "grid_coordinates"]
+__all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
+           "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
 
-FIELDS_NORMAL = ("p", "u3", "h", "status")
-FIELDS_TANGENTIAL = ("q1", "q2", "u1", "u2", "s1", "s2")
-SERIES_NORMAL = ("W", "omega3", "contact_area", "iterations", "fft_pairs")
-SERIES_TANGENTIAL = ("T1", "T2", "omega1", "omega2", "stick_area", "dissipation",
-                     "coupling_passes")
+#: Knots listed by the off-mesh warning; the others are counted.
+KNOTS_LISTED = 5
+#: A cell sticks while |q| < mu p (1 - STICK_MARGIN) (rounding of the projection).
+STICK_MARGIN = 1e-9
+#: Pressures [Pa] and displacements [m] a run may reach: their squares, summed over a
+#: grid, stay within float64 (about 1e-308 .. 1e308).
+SCALE_RANGE = (1e-150, 1e150)
+
+
+class ResumeLockedError(LockedError):
+    """Another process is running a resumable run of the same target."""
+
+
+class ResumeWarning(UserWarning):
+    """The resume state of a target was damaged or unusable: the run starts afresh."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """A termination signal (SIGTERM, SIGHUP) handled as Ctrl-C; ``signum`` says which."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"terminated by {signal.Signals(signum).name}")
+        self.signum = int(signum)
+
+
+#: Termination signals received while :func:`signals_as_interrupt` is active.
+_RECEIVED: list = []
+
+
+@contextlib.contextmanager
+def signals_as_interrupt(names=("SIGTERM", "SIGHUP"), only_default: bool = False):
+    """Inside, the termination signals raise :class:`Interrupted` in the main thread.
+
+    A run then cleans up as on Ctrl-C: temporary files removed, the part file and
+    checkpoint of a resumable run kept. A second such signal during the clean-up is
+    ignored. The march also checks after every instant (:func:`raise_if_signalled`), so a
+    signal whose exception was swallowed (it came while a finalizer ran, where Python only
+    prints exceptions) still ends the run. Outside the main thread (dask workers)
+    nothing is installed; with ``only_default`` only signals still at their default
+    action are taken over (the library's own use, so that an application's handlers win).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        signal.signal(signum, signal.SIG_IGN)      # the clean-up is not interrupted again
+        _RECEIVED.append(signum)
+        raise Interrupted(signum)
+
+    previous = {}
+    for name in names:
+        signum = getattr(signal, name, None)      # SIGHUP does not exist on Windows
+        if signum is None or (only_default and signal.getsignal(signum) is not signal.SIG_DFL):
+            continue
+        previous[signum] = signal.signal(signum, handler)
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+            while signum in _RECEIVED:
+                _RECEIVED.remove(signum)
+
+
+def raise_if_signalled() -> None:
+    """Raise :class:`Interrupted` for a termination signal received (and not yet acted on)."""
+    if _RECEIVED:
+        raise Interrupted(_RECEIVED[0])
 
 
 def grid_coordinates(scene):
@@ -59,18 +141,469 @@ def _n_steps(scene):
     return len(scene.load.knots()[0]) - 1
 
 
+# --------------------------------------------------------------------------- state
+
+@dataclass
+class State:
+    """The march after its last completed instant: what the next instant starts from.
+
+    Attributes
+    ----------
+    p : ndarray (N1, N2)
+        Pressure [Pa].
+    q : ndarray (2, N1, N2)
+        Shear traction [Pa].
+    u : ndarray (3, N1, N2)
+        Relative surface displacement [m].
+    s : ndarray (2, N1, N2)
+        Accumulated slip [m].
+    omega : ndarray (3,)
+        Rigid-body displacement of body 1 relative to body 2 [m].
+    dissipation : float
+        Frictional energy dissipated so far [J].
+    memories : list
+        The viscoelastic memory of each body (indenter, half-space), None without one.
+    normal : NormalResult or None
+        The last normal solution (reused while the normal problem does not change).
+    k : int
+        The last completed instant (-1 before the first).
+    """
+
+    p: np.ndarray
+    q: np.ndarray
+    u: np.ndarray
+    s: np.ndarray
+    omega: np.ndarray
+    dissipation: float
+    memories: list
+    normal: NormalResult | None = None
+    k: int = -1
+
+    @classmethod
+    def initial(cls, shape, memories) -> "State":
+        """The unloaded state on a grid of ``shape`` cells."""
+        n1, n2 = shape
+        return cls(np.zeros((n1, n2)), np.zeros((2, n1, n2)), np.zeros((3, n1, n2)),
+                   np.zeros((2, n1, n2)), np.zeros(3), 0.0, list(memories))
+
+    def arrays(self) -> dict:
+        """The arrays a checkpoint stores (the last normal solution is not kept)."""
+        out = {"p": self.p, "q": self.q, "u": self.u, "s": self.s, "omega": self.omega,
+               "dissipation": np.array(self.dissipation)}
+        for i, m in enumerate(self.memories):
+            if m is not None:
+                out.update({f"mem{i}_{key}": np.asarray(v) for key, v in m.state().items()})
+        return out
+
+    def restore(self, arrays: dict, k: int) -> None:
+        """Take the state a checkpoint stored after instant ``k``.
+
+        Raises
+        ------
+        ValueError, KeyError
+            An array is missing or has the wrong shape.
+        """
+        n1, n2 = self.p.shape
+        shapes = {"p": (n1, n2), "q": (2, n1, n2), "u": (3, n1, n2), "s": (2, n1, n2),
+                  "omega": (3,), "dissipation": ()}
+        for key, shape in shapes.items():
+            if np.shape(arrays[key]) != shape:
+                raise ValueError(f"{key} has shape {np.shape(arrays[key])}, expected {shape}")
+        self.p, self.q, self.u, self.s = (np.asarray(arrays[key], dtype=float)
+                                          for key in ("p", "q", "u", "s"))
+        self.omega = np.array(arrays["omega"], dtype=float)
+        self.dissipation = float(arrays["dissipation"])
+        for i, m in enumerate(self.memories):
+            if m is not None:
+                m.load_state({key[len(f"mem{i}_"):]: v for key, v in arrays.items()
+                              if key.startswith(f"mem{i}_")})
+        self.normal, self.k = None, int(k)
+
+
+# --------------------------------------------------------------------------- problem
+
+class _Problem:
+    """What does not change during the march: grid, load program, operators, plan."""
+
+    def __init__(self, scene, pl, fft=None, threads=None):
+        self.scene, self.plan, sv = scene, pl, scene.solver
+        self.x1, self.x2, d1, d2 = grid_coordinates(scene)
+        self.d1, self.d2 = d1, d2
+        self.shape = (len(self.x1), len(self.x2))
+        self.cell = d1 * d2
+        self.gap = np.asarray(scene.geometry.gap(self.x1, self.x2), dtype=float)
+        self.steps = _n_steps(scene)
+        _warn_off_knots(scene, self.steps)
+        t, W, T1, T2 = scene.load.instants(self.steps)
+        self.t = np.atleast_1d(np.asarray(t, dtype=float))
+        self.W, self.T1, self.T2 = (np.broadcast_to(np.asarray(a, dtype=float), self.t.shape)
+                                    for a in (W, T1, T2))
+        self.dt = float(self.t[1] - self.t[0]) if self.t.size > 1 else 0.0
+        self.mu = float(scene.friction.mu)
+        self.limits = Tolerances(sv.tolerance, sv.max_iterations, sv.max_coupling_passes)
+        self.tang = pl.tangential != "none"
+        self.bodies = (scene.indenter.body(), scene.halfspace.body())
+        self.beta = float(dundurs_beta(*self.bodies))
+        backend, nthreads = fft or sv.fft, threads or sv.threads
+        n1, n2 = self.shape
+        # extreme constants may overflow the kernels: harmless here, refused just below
+        with np.errstate(over="ignore", invalid="ignore"):
+            spectra = [body_spectra(b, n1, n2, d1, d2, backend, nthreads) for b in self.bodies]
+            self.conv = convolver(n1, n2, backend, int(nthreads))
+            fresh = self.new_memories()
+            self.op_first = ContactOperator(*spectra, *self._weights(fresh, True), self.conv)
+            self.hist_kernels = history_kernels(*(s if m is not None else None
+                                                  for s, m in zip(spectra, fresh)))
+            self.op_next = ContactOperator(*spectra, *self._weights(fresh, False), self.conv) \
+                if self.t.size > 1 else self.op_first
+        self._check_finite(d1, d2)
+
+    def new_memories(self) -> list:
+        """A fresh memory per viscoelastic body (None for the others)."""
+        if self.plan.memory == "none":
+            return [None, None]
+        return [make_memory(b.creep, self.dt, self.plan.time_rule, (3,) + self.shape)
+                if b.has_memory else None for b in self.bodies]
+
+    def _weights(self, mems, first):
+        w = []
+        for b, m in zip(self.bodies, mems):
+            if b.rigid:
+                w.append(0.0)
+            elif m is None:
+                w.append(float(b.creep.phi0) if b.has_memory else 1.0)
+            else:
+                w.append(m.weight0 if first else m.weight)
+        return w
+
+    def _check_finite(self, d1, d2):
+        """Refuse constants whose influence coefficients float64 cannot hold, or whose
+        pressures and displacements it cannot square (the solvers' inner products)."""
+        kernels = [op.k for op in (self.op_first, self.op_next) if not op.rigid]
+        kernels += [k for k in self.hist_kernels if k is not None]
+        sc = self.scene
+        where = (f"indenter: {sc.indenter.material}{_young(sc.indenter)}, halfspace: "
+                 f"{sc.halfspace.material}{_young(sc.halfspace)}, cells {d1:.3g} x {d2:.3g} m, "
+                 f"creep weights {self.op_next.w1:.3g}, {self.op_next.w2:.3g} with steps of "
+                 f"{self.dt:.3g} s")
+        if not all(np.isfinite(v).all() for k in kernels for v in k.values()):
+            raise SceneError(
+                f"the influence coefficients overflow float64 ({where}): the moduli, "
+                f"relaxation times or time span are beyond what a computation can hold")
+        p_star = float(np.max(np.abs(self.W))) / self.cell
+        if p_star == 0.0:
+            return
+        for op in (self.op_first, self.op_next):
+            if op.rigid:
+                continue
+            u_star = abs(op.self_influence("33")) * p_star
+            if not (SCALE_RANGE[0] <= p_star <= SCALE_RANGE[1]
+                    and SCALE_RANGE[0] <= u_star <= SCALE_RANGE[1]):
+                raise SceneError(
+                    f"the scene's scales are beyond float64: the normal force on one cell, "
+                    f"{p_star:.3g} Pa, moves it by {u_star:.3g} m ({where}); the solvers "
+                    f"square pressures and displacements, so both must lie within "
+                    f"{SCALE_RANGE[0]:g} .. {SCALE_RANGE[1]:g}: check the moduli, the "
+                    f"relaxation times, load.normal_force and the grid")
+
+    def fractions(self, first, T):
+        """The sub-steps of an instant: those of a frictional preload at t0, else one."""
+        pl = self.plan
+        if first and self.tang and pl.preload == "frictional" and \
+                (pl.coupling != "none" or np.any(T)):
+            return np.linspace(0.0, 1.0, int(self.scene.solver.preload_substeps) + 1)[1:]
+        return np.array([1.0])
+
+    def sub_plan(self, first):
+        """The paper's initial frictionless normal solve at t0, then shear from there."""
+        if first and self.tang and self.plan.preload == "frictionless":
+            return replace(self.plan, tangential="none", coupling="none")
+        return self.plan
+
+    def history(self, st, k):
+        """The known displacement U [m] at instant ``k`` from the bodies' history tractions.
+
+        Raises
+        ------
+        SceneError
+            The history tractions overflow float64 (a creep function grown beyond any
+            representable traction over an absurd time span).
+        """
+        U = np.zeros((3,) + self.shape)
+        if any(m is not None for m in st.memories) and k > 0:
+            outputs = (1, 2, 3) if self.tang else (3,)
+            # an overflow here is harmless: it is refused just below, before any use
+            with np.errstate(over="ignore", invalid="ignore"):
+                h = [None if m is None else m.known() for m in st.memories]
+                Uh = history_displacement(self.hist_kernels, h[0], h[1], self.conv,
+                                          outputs=outputs)
+            if not np.isfinite(Uh).all():
+                raise SceneError(
+                    f"step {k} (t = {self.t[k]:.6g} s): the viscoelastic history overflows "
+                    f"float64 (the creep of a body over load.time up to {self.t[-1]:.3g} s "
+                    f"grows beyond any representable displacement); shorten load.time or "
+                    f"check the relaxation times")
+            U[[o - 1 for o in outputs]] = Uh
+        return U
+
+    def attrs(self, accuracy_note: str) -> dict:
+        pl, scene = self.plan, self.scene
+        out = {
+            "title": f"contactpipe simulation: {scene.name}",
+            "scene": scene.to_toml(),
+            "models": pl.describe(),
+            "model_normal": pl.normal, "model_tangential": pl.tangential,
+            "model_coupling": pl.coupling, "model_memory": pl.memory,
+            "time_rule": pl.time_rule, "preload": pl.preload,
+            "dundurs_beta": self.beta,
+            "fft_backend": self.conv.backend,
+            "grid_spacing_m": [self.d1, self.d2],
+            "grid_points": list(self.shape),
+            "time_steps": self.steps,
+        }
+        if accuracy_note:
+            out["accuracy"] = accuracy_note
+        return out
+
+    def written(self, k) -> int:
+        """Instants in the archive once instant ``k`` is done."""
+        stride, last = int(self.scene.output.stride), self.t.size - 1
+        return k // stride + 1 + (1 if k == last and k % stride else 0)
+
+
+def _young(part) -> str:
+    young = getattr(part, "young", None)
+    return f" young = {young:g} Pa" if young is not None else ""
+
+
+# --------------------------------------------------------------------------- one instant
+
+def _step(pb: _Problem, st: State, k: int) -> dict:
+    """Solve instant ``k`` from ``st`` (updated in place); return its record."""
+    first = k == 0
+    op = pb.op_first if first else pb.op_next
+    pairs0 = pb.conv.pairs
+    U = pb.history(st, k)
+    T = np.array([pb.T1[k], pb.T2[k]])
+    # the normal problem is unchanged from the previous instant: reuse its solution
+    same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
+                   and pb.W[k] == pb.W[k - 1] and st.normal is not None)
+    iterations = passes = 0
+    for f in pb.fractions(first, T):
+        sub = pb.sub_plan(first)
+        previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None)
+        res = solve_instant(op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub,
+                            previous, pb.limits)
+        iterations += res.iterations
+        passes += res.passes
+        if not res.converged:
+            raise _failure(pb, k, T, res)
+        _advance(pb, st, op, sub, U, res)
+    st.omega[2] = res.omega3
+    _check_edges(st.p, k, pb.t[k], pb.scene)
+    for m in st.memories:
+        if m is not None:
+            m.commit(np.stack([st.q[0], st.q[1], st.p]))
+    st.k = k
+    return _record(pb, st, pb.W[k], T, iterations, passes, pb.conv.pairs - pairs0)
+
+
+def _advance(pb, st, op, sub, U, res):
+    """Take a solved (sub-)instant into the state: slip, dissipation, rigid motion."""
+    contact = res.p > 0
+    if sub.tangential == "none" and pb.tang and pb.plan.coupling != "none":
+        # frictionless preload on a coupled pair: the pressure still moves the surfaces
+        # in-plane (K13, K23); record it, or the next step would take it for slip
+        res.u[:2] = U[:2] + op.coupling_to_tangential(res.p)
+    if pb.tang:
+        du = res.u[:2] - st.u[:2]
+        ds = np.where(contact, res.domega[:, None, None] - du, 0.0)
+        stick = contact & (np.hypot(res.q[0], res.q[1]) < pb.mu * res.p * (1 - STICK_MARGIN))
+        ds[:, stick] = 0.0
+        if pb.plan.tangential == "scalar":
+            ds[1] = 0.0
+        st.s = st.s + ds
+        st.dissipation += float(np.sum(res.q * ds)) * pb.cell
+        st.omega[:2] += res.domega
+    st.p, st.q, st.u = res.p, res.q, res.u
+    st.normal = res.normal
+
+
+def _failure(pb, k, T, res) -> ConvergenceError:
+    """The error of an instant whose solve stopped, naming the sub-problem."""
+    tk, W, mu = pb.t[k], pb.W[k], pb.mu
+    if res.failed == "tangential" and np.hypot(*T) >= 0.99 * mu * W > 0:
+        return GrossSlidingError(
+            f"step {k} (t = {tk:.6g} s): the stick zone was lost under "
+            f"|T| = {np.hypot(*T):.6g} N against mu * W = {mu * W:.6g} N "
+            f"(residual {res.residual:.3g}); the contact slides as a whole, which "
+            f"has no static solution under force control. Lower the tangential "
+            f"force or refine the grid.")
+    hint = ""
+    if res.failed == "coupling":
+        hint = (f"; the normal-tangential passes did not settle in "
+                f"{res.passes} passes (strong coupling: large friction with "
+                f"Dundurs beta = {pb.beta:.2f}); raise "
+                f"solver.max_coupling_passes or take smaller load steps")
+    if not np.isfinite(res.residual):
+        hint += ("; the computation overflowed float64 (the forces, moduli or lengths of "
+                 "the scene are beyond its range)")
+    return ConvergenceError(
+        f"{res.failed} problem at step {k} (t = {tk:.6g} s) stopped after "
+        f"{res.iterations} iterations, residual {res.residual:.3g} > tolerance "
+        f"{pb.limits.tol:g} (W = {W:.6g} N, T = ({T[0]:.6g}, {T[1]:.6g}) N){hint}")
+
+
+def _check_edges(p, k, tk, scene):
+    edge = np.concatenate([p[0], p[-1], p[:, 0], p[:, -1]])
+    if np.any(edge > 0):
+        raise GridError(
+            f"step {k} (t = {tk:.6g} s): the contact reached the edge of the grid "
+            f"(grid.size = {scene.grid.size}); enlarge grid.size or set grid.size = \"auto\"")
+
+
+def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
+    """The outputs of an instant, as the archive stores them."""
+    p, q, u, omega, mu, cell = st.p, st.q, st.u, st.omega, pb.mu, pb.cell
+    contact = p > 0
+    h = np.where(contact, 0.0, np.maximum(pb.gap + u[2] - omega[2], 0.0))
+    status = np.zeros(p.shape, dtype=np.int8)
+    if pb.tang:
+        slip = contact & (np.hypot(q[0], q[1]) >= mu * p * (1 - STICK_MARGIN))
+        status[contact] = 1
+        status[slip] = 2
+    else:
+        status[contact] = 2 if mu == 0 else 1
+    rec = {"p": p, "u3": u[2], "h": h, "status": status, "W": float(p.sum() * cell),
+           "omega3": omega[2], "contact_area": float(np.count_nonzero(contact) * cell),
+           "iterations": int(iterations), "fft_pairs": int(round(pairs))}
+    if pb.tang:
+        s = st.s
+        rec.update({"q1": q[0], "q2": q[1], "u1": u[0], "u2": u[1], "s1": s[0], "s2": s[1],
+                    "T1": float(q[0].sum() * cell), "T2": float(q[1].sum() * cell),
+                    "omega1": omega[0], "omega2": omega[1],
+                    "stick_area": float(np.count_nonzero(status == 1) * cell),
+                    "dissipation": st.dissipation, "coupling_passes": int(passes)})
+    return rec
+
+
+def _warn_off_knots(scene, steps):
+    """A load knot between mesh instants is cut off (a turning point of a fretting loop
+    is never reached): say so, with the step counts that would hold every knot."""
+    t = np.asarray(scene.load.knots()[0], dtype=float)
+    if t.size < 3 or steps < 1:
+        return
+    pos = (t[1:-1] - t[0]) / (t[-1] - t[0]) * steps
+    off = np.abs(pos - np.round(pos)) > 1e-6
+    if off.any():
+        m = knot_multiple(scene)
+        hint = f"; use a multiple of {m} steps" if m else ""
+        cut = t[1:-1][off]
+        listed = ", ".join(f"{x:g}" for x in cut[:KNOTS_LISTED])
+        more = f" and {cut.size - KNOTS_LISTED} more" if cut.size > KNOTS_LISTED else ""
+        warnings.warn(f"time.steps = {steps}: the load knots at t = {listed}{more} s fall "
+                      f"between instants of the time mesh, so the program is cut there{hint}",
+                      stacklevel=4)
+
+
+# --------------------------------------------------------------------------- the march
+
+def _start(pb, path, attrs, ckpt):
+    """The writer and the state to march from: fresh, or a checkpoint's (resumable runs).
+
+    A damaged resume state (unreadable checkpoint, truncated or inconsistent part file) is
+    dropped with a :class:`ResumeWarning`, and the run starts afresh.
+    """
+    out = pb.scene.output
+    names = variables_for(pb.tang)
+    kw = {"precision": out.precision, "compress": out.compress}
+    st = State.initial(pb.shape, pb.new_memories())
+    if path is None:
+        return MemoryWriter(None, pb.x1, pb.x2, names, attrs, **kw), st
+    if ckpt is not None:
+        try:
+            saved = ckpt.load()
+            if saved is not None:
+                k, written = int(saved["k"]), int(saved["written"])
+                if not (0 <= k < pb.t.size and written == pb.written(k)):
+                    raise ValueError(f"instant {k} with {written} written does not fit the "
+                                     f"scene's {pb.t.size} instants")
+                st.restore(saved, k)
+                return ArchiveWriter(path, pb.x1, pb.x2, names, attrs, resumable=True,
+                                     resume_steps=written, **kw), st
+        except (ArchiveError, ValueError, KeyError) as e:
+            warnings.warn(ResumeWarning(f"{path}: the resume state is damaged "
+                                        f"({one_line(e, with_type=False)}); starting afresh"),
+                          stacklevel=4)
+            ckpt.discard()
+            st = State.initial(pb.shape, pb.new_memories())
+    return ArchiveWriter(path, pb.x1, pb.x2, names, attrs, resumable=ckpt is not None,
+                         **kw), st
+
+
+def _progress(scene, total, initial):
+    from tqdm.auto import tqdm          # only with progress=True: tqdm is optional here
+    return tqdm(total=total, initial=initial, desc=scene.name, unit="step")
+
+
+def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds, wall0):
+    """Every instant from the start state to the end; the archive (or Dataset)."""
+    writer, st = _start(pb, path, pb.attrs(accuracy_note), ckpt)
+    stride, last = int(pb.scene.output.stride), pb.t.size - 1
+    bar = _progress(pb.scene, pb.t.size, st.k + 1) if progress else None
+    last_ckpt = _time.perf_counter()
+    try:
+        for k in range(st.k + 1, pb.t.size):
+            raise_if_signalled()
+            record = _step(pb, st, k)
+            if k % stride == 0 or k == last:
+                writer.append(pb.t[k], record)
+            if on_step is not None:
+                on_step(k, float(pb.t[k]), record)
+            if bar is not None:
+                bar.update(1)
+            if ckpt is not None and _time.perf_counter() - last_ckpt > checkpoint_seconds:
+                writer.flush()
+                ckpt.save(k, writer.steps, st.arrays())
+                last_ckpt = _time.perf_counter()
+        result = writer.close({"wall_time_s": _time.perf_counter() - wall0})
+    except KeyboardInterrupt:           # Ctrl-C, SIGTERM, SIGHUP
+        if ckpt is not None:
+            writer.suspend()            # keep the part file and the last checkpoint
+        else:
+            writer.abort()
+        raise
+    except BaseException:
+        writer.abort()
+        if ckpt is not None:
+            ckpt.remove()
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    if ckpt is not None:
+        ckpt.remove()
+    return result
+
+
+def _inputs(scene):
+    """Files the scene reads, which its archive must not overwrite."""
+    return [getattr(scene.geometry, "file", None)]
+
+
 def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None,
              fft=None, threads=None, on_step=None, resume=False, checkpoint_seconds=30.0):
-    """Run one scene; return its labelled :class:`xarray.Dataset` (CONTRACT §3).
+    """Run one scene; return its labelled :class:`xarray.Dataset` (docs/archive.md).
 
     Parameters
     ----------
     scene : Scene
         A validated scene (:class:`contactpipe.Scene`).
     path : str or Path, optional
-        Stream the instants into this netCDF archive (atomic: written to a temporary file
-        and renamed on success) and return the archive opened lazily. Without it the
-        result is assembled in memory.
+        Stream the instants into this netCDF archive (atomic: written to a temporary file,
+        read back and checked, and renamed on success) and return the archive opened
+        lazily. Its folder is created if missing. Without it the result is assembled in
+        memory.
     progress : bool
         Show a progress bar over the time steps.
     tangential, coupling : str, optional
@@ -84,9 +617,10 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     resume : bool
         With ``path``: the run is resumable. Its part file (``.NAME.resumable.part``)
         and a checkpoint (``.NAME.ckpt.npz``, every ``checkpoint_seconds``) stay beside the
-        target when the run is interrupted (Ctrl-C, a killed process); calling again with
-        ``resume=True`` continues from the last checkpoint of the same scene. Without a
-        checkpoint it starts from the beginning.
+        target when the run is interrupted (Ctrl-C, SIGTERM, SIGHUP, a killed process);
+        calling again with ``resume=True`` continues from the last checkpoint of the same
+        scene. Without a checkpoint, or with a damaged one, it starts from the beginning
+        (a :class:`ResumeWarning` says so). While it runs it holds ``.NAME.resume.lock``.
     checkpoint_seconds : float
         Wall time between checkpoints of a resumable run [s].
 
@@ -96,311 +630,50 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
 
     Raises
     ------
+    OutputPathError
+        ``path`` is empty, a directory, a device or another special file, or a file the
+        scene reads; checked before any work.
+    SceneError
+        The run would need more memory than is available
+        (:func:`contactpipe.planning.estimate_resources`), or the scene's constants
+        overflow the influence coefficients.
+    ResumeLockedError
+        Another process runs a resumable run of the same target; nothing is touched.
     ConvergenceError
-        A solver missed its tolerance: the message names the step, the time and the
-        residual.
+        A solver missed its tolerance: the message names the step, the time, the
+        sub-problem and the residual.
     GridError
         The contact reached the edge of the grid.
-    """
-    from .archive import ArchiveWriter, MemoryWriter, open_archive
 
+    Notes
+    -----
+    SIGTERM and SIGHUP are handled like Ctrl-C (:class:`Interrupted`, a
+    ``KeyboardInterrupt``) while the run holds the main thread and no handler of the
+    application is installed for them.
+    """
     wall0 = _time.perf_counter()
+    if path is not None:
+        path = check_output_path(path, "archive", inputs=_inputs(scene))
     scene, accuracy_note = resolve_accuracy(scene)
     pl = make_plan(scene, tangential=tangential, coupling=coupling)
-    sv = scene.solver
-    x1, x2, d1, d2 = grid_coordinates(scene)
-    n1, n2 = len(x1), len(x2)
-    cell = d1 * d2
-    gap = np.asarray(scene.geometry.gap(x1, x2), dtype=float)
-    steps = _n_steps(scene)
-    _warn_off_knots(scene, steps)
-    t, W, T1, T2 = scene.load.instants(steps)
-    t = np.atleast_1d(np.asarray(t, dtype=float))
-    W, T1, T2 = (np.broadcast_to(np.asarray(a, dtype=float), t.shape) for a in (W, T1, T2))
-    dt = float(t[1] - t[0]) if t.size > 1 else 0.0
-    mu = float(scene.friction.mu)
-
-    backend = fft or sv.fft
-    nthreads = threads or sv.threads
-    b1, b2 = scene.indenter.body(), scene.halfspace.body()
-    spec1 = body_spectra(b1, n1, n2, d1, d2, backend, nthreads)
-    spec2 = body_spectra(b2, n1, n2, d1, d2, backend, nthreads)
-    conv = convolver(n1, n2, backend, int(nthreads))
-
-    # memory: one per viscoelastic body; tractions held as (q1, q2, p)
-    mems = [None, None]
-    if pl.memory != "none":
-        for i, b in enumerate((b1, b2)):
-            if b.has_memory:
-                mems[i] = make_memory(b.creep, dt, pl.time_rule, (3, n1, n2))
-
-    def weights(first):
-        w = []
-        for i, b in enumerate((b1, b2)):
-            if b.rigid:
-                w.append(0.0)
-            elif mems[i] is None:
-                w.append(float(b.creep.phi0) if b.has_memory else 1.0)
-            else:
-                w.append(mems[i].weight0 if first else mems[i].weight)
-        return w
-
-    op_first = ContactOperator(spec1, spec2, *weights(True), conv)
-    hist_kernels = history_kernels(spec1 if mems[0] is not None else None,
-                                   spec2 if mems[1] is not None else None)
-    op_next = ContactOperator(spec1, spec2, *weights(False), conv) if t.size > 1 else op_first
-
-    tang = pl.tangential != "none"
-    fields = list(FIELDS_NORMAL) + (list(FIELDS_TANGENTIAL) if tang else [])
-    series = list(SERIES_NORMAL) + (list(SERIES_TANGENTIAL) if tang else [])
-    attrs = {
-        "title": f"contactpipe simulation: {scene.name}",
-        "scene": scene.to_toml(),
-        "models": pl.describe(),
-        "model_normal": pl.normal, "model_tangential": pl.tangential,
-        "model_coupling": pl.coupling, "model_memory": pl.memory,
-        "time_rule": pl.time_rule, "preload": pl.preload,
-        "dundurs_beta": _beta(b1, b2),
-        "fft_backend": conv.backend,
-        "grid_spacing_m": [d1, d2],
-        "grid_points": [n1, n2],
-        "time_steps": steps,
-    }
-    if accuracy_note:
-        attrs["accuracy"] = accuracy_note
-    out = scene.output
-    ckpt = _Checkpoint(path, scene) if (path is not None and resume) else None
-    state = ckpt.load() if ckpt is not None else None
-    if path is not None:
-        writer = ArchiveWriter(path, x1, x2, fields + series, attrs, precision=out.precision,
-                               compress=out.compress, resumable=resume,
-                               resume_steps=None if state is None else state["written"])
-    else:
-        writer = MemoryWriter(None, x1, x2, fields + series, attrs, precision=out.precision,
-                              compress=out.compress)
-
-    p = np.zeros((n1, n2))
-    q = np.zeros((2, n1, n2))
-    u = np.zeros((3, n1, n2))
-    s = np.zeros((2, n1, n2))
-    omega = np.zeros(3)
-    dissipation = 0.0
-    last_normal = None
-    k_start = 0
-    if state is not None:
-        k_start = int(state["k"]) + 1
-        p, q, u, s = state["p"], state["q"], state["u"], state["s"]
-        omega, dissipation = np.array(state["omega"]), float(state["dissipation"])
-        for i, m in enumerate(mems):
-            if m is not None:
-                m.load_state({key[len(f"mem{i}_"):]: v for key, v in state.items()
-                              if key.startswith(f"mem{i}_")})
-    stride = int(out.stride)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-        bar = tqdm(total=t.size, initial=k_start, desc=scene.name, unit="step")
-    last_ckpt = _time.perf_counter()
-    try:
-        for k in range(k_start, t.size):
-            first = k == 0
-            op = op_first if first else op_next
-            pairs0 = conv.pairs
-            U = np.zeros((3, n1, n2))
-            if any(m is not None for m in mems) and not first:
-                h = [None if m is None else m.known() for m in mems]
-                outputs = (1, 2, 3) if tang else (3,)
-                Uh = history_displacement(hist_kernels, h[0], h[1], conv, outputs=outputs)
-                U[[o - 1 for o in outputs]] = Uh
-            T = np.array([T1[k], T2[k]])
-            # the sub-steps of a frictional preload (instantaneous response at t0)
-            if first and tang and pl.preload == "frictional" and \
-                    (pl.coupling != "none" or np.any(T)):
-                fractions = np.linspace(0.0, 1.0, int(sv.preload_substeps) + 1)[1:]
-            else:
-                fractions = np.array([1.0])
-            iterations = 0
-            passes = 0
-            # the normal problem is unchanged from the previous instant: reuse its solution
-            same_normal = (not first and pl.coupling == "none" and pl.memory == "none"
-                           and W[k] == W[k - 1] and last_normal is not None)
-            for f in fractions:
-                if first and tang and pl.preload == "frictionless":
-                    # the paper's initial frictionless normal solve, then shear from there
-                    sub_plan = _frictionless(pl)
-                else:
-                    sub_plan = pl
-                res = solve_instant(op, gap, U, f * W[k], f * T, cell, mu, q, u, p,
-                                    sub_plan, sv.tolerance, sv.max_iterations,
-                                    sv.max_coupling_passes,
-                                    normal=last_normal if same_normal else None)
-                iterations += res.iterations
-                passes += res.passes
-                if not res.converged and res.failed == "tangential" and \
-                        np.hypot(*T) >= 0.99 * mu * W[k] > 0:
-                    raise GrossSlidingError(
-                        f"step {k} (t = {t[k]:.6g} s): the stick zone was lost under "
-                        f"|T| = {np.hypot(*T):.6g} N against mu * W = {mu * W[k]:.6g} N "
-                        f"(residual {res.residual:.3g}); the contact slides as a whole, which "
-                        f"has no static solution under force control. Lower the tangential "
-                        f"force or refine the grid.")
-                if not res.converged:
-                    hint = ""
-                    if res.failed == "coupling":
-                        hint = (f"; the normal-tangential passes did not settle in "
-                                f"{res.passes} passes (strong coupling: large friction with "
-                                f"Dundurs beta = {_beta(b1, b2):.2f}); raise "
-                                f"solver.max_coupling_passes or take smaller load steps")
-                    raise ConvergenceError(
-                        f"{res.failed} problem at step {k} (t = {t[k]:.6g} s) stopped after "
-                        f"{res.iterations} iterations, residual {res.residual:.3g} > tolerance "
-                        f"{sv.tolerance:g} (W = {W[k]:.6g} N, T = ({T[0]:.6g}, {T[1]:.6g}) N)"
-                        f"{hint}")
-                contact = res.p > 0
-                if sub_plan.tangential == "none" and tang and pl.coupling != "none":
-                    # frictionless preload on a coupled pair: the pressure still moves the
-                    # surfaces in-plane (K13, K23); record it, or the next step would take
-                    # it for slip
-                    res.u[:2] = U[:2] + op.coupling_to_tangential(res.p)
-                if tang:
-                    du = res.u[:2] - u[:2]
-                    ds = np.where(contact, res.domega[:, None, None] - du, 0.0)
-                    stick = contact & (np.hypot(res.q[0], res.q[1]) < mu * res.p * (1 - 1e-9))
-                    ds[:, stick] = 0.0
-                    if pl.tangential == "scalar":
-                        ds[1] = 0.0
-                    s = s + ds
-                    dissipation += float(np.sum(res.q * ds)) * cell
-                    omega[:2] += res.domega
-                p, q, u = res.p, res.q, res.u
-                last_normal = res.normal
-            omega[2] = res.omega3
-            _check_edges(p, k, t[k], scene)
-            for i, m in enumerate(mems):
-                if m is not None:
-                    m.commit(np.stack([q[0], q[1], p]))
-            record = _record(scene, pl, gap, p, q, u, s, omega, W[k], T, dissipation,
-                             iterations, passes, conv.pairs - pairs0, mu, cell, tang)
-            if k % stride == 0 or k == t.size - 1:
-                writer.append(t[k], record)
-            if on_step is not None:
-                on_step(k, float(t[k]), record)
-            if bar is not None:
-                bar.update(1)
-            if ckpt is not None and _time.perf_counter() - last_ckpt > checkpoint_seconds:
-                writer.flush()
-                ckpt.save(k, writer.steps, p, q, u, s, omega, dissipation, mems)
-                last_ckpt = _time.perf_counter()
-    except KeyboardInterrupt:
-        if ckpt is not None:
-            writer.suspend()           # keep the part file and the last checkpoint
-        else:
-            writer.abort()
-        raise
-    except BaseException:
-        writer.abort()
-        if ckpt is not None:
-            ckpt.remove()
-        raise
-    finally:
-        if bar is not None:
-            bar.close()
-    final = {"wall_time_s": _time.perf_counter() - wall0}
-    result = writer.close(final)
-    if ckpt is not None:
-        ckpt.remove()
-    if path is not None:
+    check_resources(estimate_resources(scene, pl, in_memory=path is None))
+    opts = (accuracy_note, on_step, progress, checkpoint_seconds, wall0)
+    with signals_as_interrupt(only_default=True):
+        if path is None:
+            return _march(_Problem(scene, pl, fft, threads), None, None, *opts)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise OutputPathError(f"archive {path}: cannot create its folder "
+                                  f"({e.strerror or one_line(e)})") from None
+        if not resume:
+            return open_archive(_march(_Problem(scene, pl, fft, threads), path, None, *opts))
+        lock = resume_lock(path)
+        with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
+            try:
+                result = _march(_Problem(scene, pl, fft, threads), path,
+                                Checkpoint(path, scene.digest()), *opts)
+            finally:
+                lock.unlink(missing_ok=True)
         return open_archive(result)
-    return result
 
-
-class _Checkpoint:
-    """The state of a resumable run after a completed instant (``.NAME.ckpt.npz``)."""
-
-    def __init__(self, path, scene):
-        import pathlib
-        self.path = pathlib.Path(path)
-        self.file = self.path.with_name(f".{self.path.name}.ckpt.npz")
-        self.digest = scene.digest()
-
-    def load(self):
-        from .archive import resumable_part
-        if not (self.file.exists() and resumable_part(self.path).exists()):
-            return None
-        with np.load(self.file) as z:
-            state = {k: z[k] for k in z.files}
-        if str(state.pop("digest")) != self.digest:
-            return None                  # another scene: start afresh
-        return state
-
-    def save(self, k, written, p, q, u, s, omega, dissipation, mems):
-        arrays = {"digest": np.array(self.digest), "k": np.array(k),
-                  "written": np.array(written), "p": p, "q": q, "u": u, "s": s,
-                  "omega": omega, "dissipation": np.array(dissipation)}
-        for i, m in enumerate(mems):
-            if m is not None:
-                arrays.update({f"mem{i}_{key}": np.asarray(v) for key, v in m.state().items()})
-        with atomic_path(self.file) as tmp, open(tmp, "wb") as f:
-            np.savez(f, **arrays)
-
-    def remove(self):
-        self.file.unlink(missing_ok=True)
-
-
-def _warn_off_knots(scene, steps):
-    """A load knot between mesh instants is cut off (a turning point of a fretting loop
-    is never reached): say so, with the step counts that would hold every knot."""
-    t = np.asarray(scene.load.knots()[0], dtype=float)
-    if t.size < 3 or steps < 1:
-        return
-    pos = (t[1:-1] - t[0]) / (t[-1] - t[0]) * steps
-    off = np.abs(pos - np.round(pos)) > 1e-6
-    if off.any():
-        import warnings
-        from .accuracy import knot_multiple
-        m = knot_multiple(scene)
-        hint = f"; use a multiple of {m} steps" if m else ""
-        warnings.warn(f"time.steps = {steps}: the load knots at t = "
-                      f"{', '.join(f'{x:g}' for x in t[1:-1][off])} s fall between instants of "
-                      f"the time mesh, so the program is cut there{hint}", stacklevel=3)
-
-
-def _frictionless(pl):
-    from dataclasses import replace
-    return replace(pl, tangential="none", coupling="none")
-
-
-def _beta(b1, b2):
-    from .materials import dundurs_beta
-    return float(dundurs_beta(b1, b2))
-
-
-def _check_edges(p, k, tk, scene):
-    edge = np.concatenate([p[0], p[-1], p[:, 0], p[:, -1]])
-    if np.any(edge > 0):
-        raise GridError(
-            f"step {k} (t = {tk:.6g} s): the contact reached the edge of the grid "
-            f"(grid.size = {scene.grid.size}); enlarge grid.size or set grid.size = \"auto\"")
-
-
-def _record(scene, pl, gap, p, q, u, s, omega, W, T, dissipation, iterations, passes,
-            pairs, mu, cell, tang):
-    contact = p > 0
-    h = np.where(contact, 0.0, np.maximum(gap + u[2] - omega[2], 0.0))
-    status = np.zeros(p.shape, dtype=np.int8)
-    if tang:
-        slip = contact & (np.hypot(q[0], q[1]) >= mu * p * (1 - 1e-9))
-        status[contact] = 1
-        status[slip] = 2
-    else:
-        status[contact] = 2 if mu == 0 else 1
-    rec = {"p": p, "u3": u[2], "h": h, "status": status, "W": float(p.sum() * cell),
-           "omega3": omega[2], "contact_area": float(np.count_nonzero(contact) * cell),
-           "iterations": int(iterations), "fft_pairs": int(round(pairs))}
-    if tang:
-        rec.update({"q1": q[0], "q2": q[1], "u1": u[0], "u2": u[1], "s1": s[0], "s2": s[1],
-                    "T1": float(q[0].sum() * cell), "T2": float(q[1].sum() * cell),
-                    "omega1": omega[0], "omega2": omega[1],
-                    "stick_area": float(np.count_nonzero(status == 1) * cell),
-                    "dissipation": dissipation, "coupling_passes": int(passes)})
-    return rec

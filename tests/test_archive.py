@@ -1,21 +1,28 @@
 """Archives: round trips, precision and compression, atomic writes, refusals (CONTRACT §3)."""
 import os
 import pathlib
+import shutil
 import signal
 import subprocess
 import sys
 import textwrap
+import zlib
 
 import dask.array as da
+import netCDF4
 import numpy as np
 import pytest
 import xarray as xr
 
+import contactpipe as cp
 from contactpipe.archive import (
-    ArchiveWriter, MemoryWriter, is_complete, open_archive, save, to_dataset, validate,
+    ArchiveWriter, MemoryWriter, content_problems, is_complete, open_archive, save,
+    to_dataset, validate,
 )
 from contactpipe.exceptions import ArchiveError
 from contactpipe.nomenclature import VARIABLES
+from contactpipe.pipeline.cli import main as cli_main
+from contactpipe.testing import TINY_SCENES
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 CHECKER = ROOT.parent / "shared" / "tools" / "check_contract.py"
@@ -377,3 +384,223 @@ def test_synthetic_archive_passes_the_outside_checker(tmp_path):
     res = subprocess.run([sys.executable, str(CHECKER), str(path32), "--frictional"],
                          capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stdout + res.stderr
+
+
+# --------------------------------------------------------------------------- damaged archives
+# Each case is built with netCDF4 from an archive of a real run (steel on steel, fretting
+# loop, 24 x 24 cells, 5 steps: compare and plot succeed on it), then given to
+# open_archive(verify=True) and to `contactpipe compare` / `contactpipe plot`: one
+# ArchiveError naming the file, the variable, the first bad step and the problem; exit 2,
+# one line on stderr, no figure written.
+
+def elastic_fretting(compress=True):
+    return cp.Scene.from_toml_text(TINY_SCENES["fretting"]).replace({
+        "indenter.material": "elastic", "indenter.young": 210e9, "indenter.poisson": 0.3,
+        "halfspace.material": "elastic", "halfspace.young": 210e9,
+        "halfspace.creep": None, "halfspace.relaxation_time": None,
+        "time.steps": 5, "output.compress": compress})
+
+
+@pytest.fixture(scope="module")
+def good_runs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("good")
+    return {c: cp.simulate(elastic_fretting(c), folder / f"good-{c}.nc").encoding["source"]
+            for c in (True, False)}
+
+
+def edited(src, dst, edit):
+    """A copy of ``src`` changed in place by ``edit(nc)`` (netCDF4, checksums kept valid)."""
+    shutil.copyfile(src, dst)
+    with netCDF4.Dataset(dst, "a") as nc:
+        edit(nc)
+    return dst
+
+
+def copied(src, dst, drop=(), steps=None, attrs=None):
+    """A new archive with the variables of ``src`` but ``drop``, its first ``steps``
+    instants, and ``attrs`` over its attributes (netCDF4)."""
+    with netCDF4.Dataset(src) as a, netCDF4.Dataset(dst, "w") as b:
+        for name, dim in a.dimensions.items():
+            b.createDimension(name, None if dim.isunlimited() else len(dim))
+        for name, v in a.variables.items():
+            if name in drop:
+                continue
+            w = b.createVariable(name, v.dtype, v.dimensions, fill_value=False,
+                                 fletcher32=True)
+            w.setncatts({k: v.getncattr(k) for k in v.ncattrs()})
+            data = v[:] if "time" not in v.dimensions else v[:steps]
+            if np.size(data):
+                w[:] = data
+        b.setncatts({**{k: a.getncattr(k) for k in a.ncattrs()}, **(attrs or {})})
+    return dst
+
+
+def _stored_chunk(data, raw, compressed):
+    """(offset, length) of the chunk holding ``raw`` in the file's bytes: as is, or (zlib)
+    the deflate stream that inflates to it shuffled (HDF5's order: shuffle, fletcher32,
+    deflate)."""
+    if not compressed:
+        return data.find(raw), len(raw)
+    shuffled = np.frombuffer(raw, np.uint8).reshape(-1, 8).T.tobytes()
+    for at in range(len(data) - 1):
+        if data[at] != 0x78 or data[at + 1] not in (0x01, 0x5E, 0x9C, 0xDA):
+            continue                     # not a zlib header
+        z = zlib.decompressobj()
+        try:
+            out = z.decompress(data[at:at + 4 * len(raw)])
+        except zlib.error:
+            continue
+        if out[:len(shuffled)] == shuffled:
+            return at, 4 * len(raw) - len(z.unused_data) if z.eof else len(raw) // 4
+    return -1, 0
+
+
+def flipped(src, dst, step, compressed):
+    """A copy of ``src`` with one byte flipped inside the stored chunk of q1 at ``step``."""
+    with netCDF4.Dataset(src) as nc:
+        raw = np.asarray(nc["q1"][step], dtype="<f8").tobytes()
+    data = bytearray(pathlib.Path(src).read_bytes())
+    at, length = _stored_chunk(bytes(data), raw, compressed)
+    assert at >= 0, "the chunk of q1 is not in the file"
+    data[at + length // 2] ^= 0xFF
+    pathlib.Path(dst).write_bytes(bytes(data))
+    return dst
+
+
+def contact_cell(nc, step):
+    p = np.asarray(nc["p"][step])
+    return np.unravel_index(int(np.argmax(p)), p.shape), float(p.max())
+
+
+def _over_coulomb(nc):
+    (i, j), pmax = contact_cell(nc, 2)
+    nc["q1"][2, i, j] = 0.3 * pmax                   # mu = 0.1
+
+
+BAD = {
+    "nan": (lambda src, dst: edited(src, dst, lambda nc: nc["p"].__setitem__(
+        (2, 12, 12), np.nan)), r"p holds NaN or inf at 1 time step\(s\), first at step 2 "
+                               r"\(t = 0.4 s\)"),
+    "inf": (lambda src, dst: edited(src, dst, lambda nc: nc["W"].__setitem__(1, np.inf)),
+            r"W holds NaN or inf at 1 time step\(s\), first at step 1 \(t = 0.2 s\)"),
+    "negative_p": (lambda src, dst: edited(src, dst, lambda nc: nc["p"].__setitem__(
+        (3, 12, 12), -1e6)), r"p: negative pressure at 1 time step\(s\), first at step 3 "
+                             r"\(t = 0.6 s\): min -1e\+06 Pa"),
+    "status_7": (lambda src, dst: edited(src, dst, lambda nc: nc["status"].__setitem__(
+        (1, 12, 12), 7)), r"status: values outside flag_values \[0, 1, 2\] at 1 time "
+                          r"step\(s\), first at step 1 \(t = 0.2 s\): values \[7\]"),
+    "coulomb": (lambda src, dst: edited(src, dst, _over_coulomb),
+                r"q1, q2: \|q\| > mu p \(mu = 0.1.*first at step 2 \(t = 0.4 s\)"),
+    "flipped_raw": (lambda src, dst: flipped(src, dst, 2, compressed=False),
+                    r"q1: unreadable \(checksum mismatch or corrupt chunk\) at 1 time "
+                    r"step\(s\), first at step 2 \(t = 0.4 s\)"),
+    "corrupt_chunk": (lambda src, dst: flipped(src, dst, 3, compressed=True),
+                      r"q1: unreadable \(checksum mismatch or corrupt chunk\) at 1 time "
+                      r"step\(s\), first at step 3 \(t = 0.6 s\)"),
+    "no_q1": (lambda src, dst: copied(src, dst, drop=("q1",)),
+              r"variable 'q1' missing: the archive says a tangential model ran"),
+    "no_steps": (lambda src, dst: copied(src, dst, steps=0),
+                 r"dimension 'time' has size 0"),
+    "steps_1e9": (lambda src, dst: copied(src, dst, attrs={"scene": pathlib.Path(
+        dst).with_suffix(".toml").read_text()}),
+        r"time.steps = 1000000000 and output.stride = 1, which write 1000000001 instants, "
+        r"but the archive holds 6"),
+}
+SCHEMA_CASES = ("no_q1", "no_steps", "steps_1e9")       # refused even without verify
+
+
+def make_bad(case, good_runs, tmp_path):
+    build, _ = BAD[case]
+    src = good_runs[case != "flipped_raw"]
+    dst = tmp_path / f"bad-{case}.nc"
+    if case == "steps_1e9":
+        with netCDF4.Dataset(src) as nc:
+            scene = nc.getncattr("scene")
+        assert "steps = 5\n" in scene
+        dst.with_suffix(".toml").write_text(scene.replace("steps = 5\n",
+                                                          "steps = 1000000000\n"))
+    return build(src, dst)
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_damaged_archive_is_one_archive_error(case, good_runs, tmp_path):
+    bad = make_bad(case, good_runs, tmp_path)
+    with pytest.raises(ArchiveError, match=BAD[case][1]) as err:
+        open_archive(bad, verify=True)
+    message = str(err.value)
+    assert "\n" not in message and message.startswith(str(bad))
+    if case in SCHEMA_CASES:
+        with pytest.raises(ArchiveError, match=BAD[case][1]):
+            open_archive(bad)
+        assert not is_complete(bad)
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_compare_and_plot_refuse_a_damaged_archive(case, good_runs, tmp_path, capsys):
+    bad = make_bad(case, good_runs, tmp_path)
+    figure = tmp_path / "f.png"
+    for argv in (["compare", str(bad)], ["plot", str(bad), "-o", str(figure)]):
+        assert cli_main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1, err
+        assert bad.name in err and "Traceback" not in err
+    assert not figure.exists()
+
+
+def test_the_good_archives_pass(good_runs, tmp_path, capsys):
+    """The archives the damaged ones are made from: verified, compared and plotted."""
+    for path in good_runs.values():
+        open_archive(path, verify=True).close()
+        assert cli_main(["compare", str(path)]) == 0
+        assert cli_main(["plot", str(path), "-o", str(tmp_path / "g.png")]) == 0
+    capsys.readouterr()
+
+
+def test_damaged_archive_through_the_command_line(good_runs, tmp_path):
+    """End to end in a fresh process: exit 2, one line, no traceback."""
+    bad = make_bad("corrupt_chunk", good_runs, tmp_path)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
+    res = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "compare",
+                          str(bad)], capture_output=True, text=True, env=env, timeout=300)
+    assert res.returncode == 2, res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and "step 3" in res.stderr
+
+
+def test_verification_streams_in_bounded_blocks(good_runs):
+    """With a budget of one byte the scan reads one instant at a time and finds the same."""
+    ds = open_archive(good_runs[True])
+    bad = ds.copy(deep=True).load()
+    bad["p"][4, 3, 3] = -5.0
+    assert content_problems(ds, budget_bytes=1) == []
+    assert content_problems(bad, budget_bytes=1) == content_problems(bad)
+    assert content_problems(bad)[0].startswith("p: negative pressure at 1 time step(s), "
+                                               "first at step 4")
+
+
+def test_a_writer_never_publishes_what_breaks_the_rules(tmp_path):
+    """Values the per-step check lets through (a negative pressure) are found when the
+    file is read back at close: nothing is published, no temporary file stays."""
+    target = tmp_path / "run.nc"
+    steps = synthetic_steps()
+    w = ArchiveWriter(target, X1, X2, NAMES, ATTRS)
+    for k, (t, values) in enumerate(steps):
+        if k == 2:
+            values = {**values, "p": values["p"] - 1e8}
+        w.append(t, values)
+    with pytest.raises(ArchiveError, match=r"run.nc: not published.*p: negative pressure "
+                                           r"at 1 time step\(s\), first at step 2"):
+        w.close(WALL)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_every_variable_is_checksummed(tmp_path):
+    for compress in (True, False):
+        path = write(tmp_path / f"c{compress}.nc", compress=compress)
+        with netCDF4.Dataset(path) as nc:
+            for name, v in nc.variables.items():
+                assert v.filters()["fletcher32"], (compress, name)
+        saved = save(in_memory(), tmp_path / f"s{compress}.nc", compress=compress)
+        with netCDF4.Dataset(saved) as nc:
+            for name, v in nc.variables.items():
+                assert v.filters()["fletcher32"], (compress, name)

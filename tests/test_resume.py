@@ -1,15 +1,23 @@
-"""A long run interrupted (SIGKILL) and resumed ends identical to an uninterrupted one."""
+"""Resumable runs: a long run interrupted (SIGKILL, Ctrl-C) and resumed ends identical to
+an uninterrupted one; a damaged resume state (checkpoint, part file) starts afresh with one
+warning and completes."""
 import os
+import pathlib
 import signal
 import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import numpy as np
+import pytest
 
 import contactpipe as cp
+from contactpipe.simulation import ResumeWarning
 from contactpipe.testing import TINY_SCENES
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 SCENE = TINY_SCENES["fretting"].replace("steps = 20", "steps = 200")
 
@@ -42,7 +50,9 @@ def test_kill_and_resume(tmp_path):
         k_done = int(z["k"])
     assert 0 < k_done < 200
     scene = cp.Scene.from_toml(scene_file)
-    resumed = cp.simulate(scene, target, resume=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ResumeWarning)     # resumed, not started afresh
+        resumed = cp.simulate(scene, target, resume=True)
     assert not ckpt.exists() and not part.exists()
     reference = cp.simulate(scene)
     assert resumed.sizes["time"] == 201
@@ -64,3 +74,102 @@ def test_resume_without_checkpoint_starts_afresh(tmp_path):
     ds = cp.simulate(scene, tmp_path / "a.nc", resume=True)
     assert ds.sizes["time"] == 6
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.nc"]
+
+
+# --------------------------------------------------------------------------- damaged state
+
+def interrupted(tmp_path, at=8, steps=20):
+    """A resumable run stopped by Ctrl-C after instant ``at``: its part file and
+    checkpoint stay beside the target."""
+    scene = cp.Scene.from_toml_text(SCENE.replace("steps = 200", f"steps = {steps}"))
+    target = tmp_path / "run.nc"
+
+    def stop(k, t, rec):
+        if k == at:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        cp.simulate(scene, target, resume=True, checkpoint_seconds=0.0, on_step=stop)
+    part, ckpt = tmp_path / ".run.nc.resumable.part", tmp_path / ".run.nc.ckpt.npz"
+    assert part.exists() and ckpt.exists() and not target.exists()
+    return scene, target, part, ckpt
+
+
+def assert_same_run(ds, reference):
+    ds = ds.load()
+    for name in ("p", "q1", "u3", "s1", "W", "T1", "omega1", "dissipation"):
+        ref = reference[name].values
+        np.testing.assert_allclose(ds[name].values, ref, rtol=0,
+                                   atol=1e-7 * max(float(np.abs(ref).max()), 1e-300),
+                                   err_msg=name)
+
+
+def test_ctrl_c_then_resume_continues(tmp_path):
+    scene, target, part, ckpt = interrupted(tmp_path)
+    with np.load(ckpt) as z:
+        assert int(z["k"]) == 7 and int(z["written"]) == 8      # the last saved instant
+    ds = cp.simulate(scene, target, resume=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc"]
+    assert_same_run(ds, cp.simulate(scene))
+
+
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "empty", "keys_missing"])
+def test_a_damaged_checkpoint_starts_afresh(tmp_path, damage):
+    scene, target, part, ckpt = interrupted(tmp_path)
+    data = ckpt.read_bytes()
+    if damage == "garbage":
+        ckpt.write_bytes(b"not a checkpoint" * 10)
+    elif damage == "truncated":
+        ckpt.write_bytes(data[: len(data) // 2])
+    elif damage == "empty":
+        ckpt.write_bytes(b"")
+    else:
+        with np.load(ckpt) as z:
+            kept = {k: z[k] for k in z.files if k not in ("k", "p")}
+        with open(ckpt, "wb") as f:
+            np.savez(f, **kept)
+    with pytest.warns(ResumeWarning, match=r"run.nc: the resume state is damaged "
+                                           r"\(.*\); starting afresh"):
+        ds = cp.simulate(scene, target, resume=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc"]
+    assert_same_run(ds, cp.simulate(scene))
+
+
+@pytest.mark.parametrize("damage", ["truncated", "garbage", "missing"])
+def test_a_damaged_part_file_starts_afresh(tmp_path, damage):
+    scene, target, part, ckpt = interrupted(tmp_path)
+    if damage == "truncated":
+        data = part.read_bytes()
+        part.write_bytes(data[: len(data) // 2])
+    elif damage == "garbage":
+        part.write_bytes(np.random.default_rng(0).bytes(4096))
+    else:
+        part.unlink()
+    if damage == "missing":
+        ds = cp.simulate(scene, target, resume=True)     # no part: a fresh start, silently
+    else:
+        with pytest.warns(ResumeWarning, match=r"cannot resume from \.run\.nc\.resumable"
+                                               r"\.part.*starting afresh"):
+            ds = cp.simulate(scene, target, resume=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc"]
+    assert_same_run(ds, cp.simulate(scene))
+    cp.open_archive(target, verify=True)
+
+
+def test_damaged_resume_state_through_the_command_line(tmp_path):
+    """`run --resume` over a corrupt checkpoint: one warning line, exit 0, a valid archive."""
+    scene, target, part, ckpt = interrupted(tmp_path)
+    ckpt.write_bytes(b"\x00" * 100)
+    scene_file = tmp_path / "scene.toml"
+    scene_file.write_text(scene.to_toml())
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
+    res = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run",
+                          str(scene_file), "-o", str(target), "--resume", "--no-progress"],
+                         capture_output=True, text=True, env=env, timeout=600)
+    assert res.returncode == 0, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("contactpipe: warning: ")
+    assert "the resume state is damaged" in lines[0] and "starting afresh" in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc", "scene.toml"]
+    cp.open_archive(target, verify=True)

@@ -7,7 +7,10 @@ import pytest
 import xarray as xr
 
 import contactpipe as cp
+from contactpipe.materials import maxwell
 from contactpipe.pipeline.cli import main as cli_main
+from contactpipe.simulation import State
+from contactpipe.solver.memory import make_memory
 
 from conftest import W, fretting_scene
 
@@ -126,3 +129,35 @@ def test_cli_missing_file(tmp_path):
     r = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run", str(tmp_path / "no.toml"),
                         "-o", str(tmp_path / "o.nc")], capture_output=True, text=True)
     assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_state_round_trips_through_its_arrays():
+    """The arrays a checkpoint keeps restore the State of a viscoelastic run exactly."""
+    rng = np.random.default_rng(0)
+    memories = [None, make_memory(maxwell(1.0), 0.1, "linear", (3, 4, 5))]
+    st = State.initial((4, 5), memories)
+    assert st.p.shape == (4, 5) and st.q.shape == (2, 4, 5) and st.u.shape == (3, 4, 5)
+    assert st.k == -1 and st.dissipation == 0.0 and st.normal is None
+    for _ in range(3):
+        memories[1].commit(rng.random((3, 4, 5)))
+    st.p, st.q, st.u, st.s = rng.random((4, 5)), rng.random((2, 4, 5)), \
+        rng.random((3, 4, 5)), rng.random((2, 4, 5))
+    st.omega, st.dissipation = rng.random(3), 1.5
+    back = State.initial((4, 5), [None, make_memory(maxwell(1.0), 0.1, "linear", (3, 4, 5))])
+    back.restore(st.arrays(), 7)
+    assert back.k == 7
+    for key, value in st.arrays().items():
+        np.testing.assert_array_equal(back.arrays()[key], value, err_msg=key)
+    with pytest.raises(ValueError, match=r"q has shape \(2, 5, 4\)"):
+        back.restore({**st.arrays(), "q": np.zeros((2, 5, 4))}, 7)
+
+
+def test_on_step_sees_every_instant_and_the_folder_is_made(tmp_path):
+    seen = []
+    target = tmp_path / "new" / "folder" / "a.nc"
+    ds = cp.simulate(creep_scene(steps=4), target, on_step=lambda k, t, rec: seen.append(
+        (k, t, sorted(rec))))
+    assert [k for k, _, _ in seen] == [0, 1, 2, 3, 4]
+    assert seen[0][2] == sorted(["p", "u3", "h", "status", "W", "omega3", "contact_area",
+                                 "iterations", "fft_pairs"])
+    assert ds.sizes["time"] == 5 and target.exists()

@@ -1,9 +1,21 @@
 """Command line: ``contactpipe run | sweep | compare | plot | pipeline | bench``.
 
-Exit status 0 on success; on bad input or a failed run, non-zero with a one-line reason on
-stderr (no traceback; ``--debug`` shows it): 2 for bad input (scene, sweep or pipeline
-file, arguments), 1 for a run that failed (no convergence, contact off the grid, a member
-that failed), 130 when interrupted.
+Exit status 0 on success; otherwise one line on stderr (no traceback; ``--debug`` shows
+it) and:
+
+* 2 - bad input: a scene, sweep or pipeline file, an argument, an output path (empty, a
+  directory, a device, an input file), an input archive that is missing, unreadable or
+  damaged (:class:`~contactpipe.exceptions.ArchiveError`), a run that would not fit in the
+  memory available; nothing is written;
+* 1 - a run that failed: no convergence, contact off the grid, out of memory, an archive
+  that could not be written, a member that failed;
+* 3 - another process holds the lock (a resumable run of the same target, a sweep or a
+  pipeline run on the same folder); nothing is touched;
+* 130 - interrupted by Ctrl-C (SIGINT); 143 - terminated by SIGTERM; 129 - by SIGHUP
+  (128 + the signal number). Both termination signals are handled like Ctrl-C: temporary
+  files are removed, a resumable run keeps its part file and checkpoint.
+
+Warnings are printed as one line each (``contactpipe: warning: ...``).
 
 Each stage module provides ``add_arguments(parser)`` and ``main(args) -> int``; this file
 only wires them together.
@@ -13,10 +25,16 @@ from __future__ import annotations
 import argparse
 import importlib
 import pathlib
+import signal
 import sys
+import warnings
 
 from .._version import __version__
-from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line
+from ..exceptions import (ArchiveError, ContactpipeError, OutputPathError, SceneError,
+                          one_line)
+from ..files import LockedError, check_output_path
+from ..scene import Scene
+from ..simulation import signals_as_interrupt, simulate
 
 __all__ = ["main", "build_parser"]
 
@@ -34,9 +52,9 @@ def _add_run(sub):
     p = sub.add_parser("run", help="one simulation -> one archive",
                        description="Run one scene file and write its netCDF archive.")
     p.add_argument("scene", type=pathlib.Path, help="scene file (TOML)")
-    p.add_argument("-o", "--output", type=pathlib.Path, required=True,
+    p.add_argument("-o", "--output", required=True,
                    help="archive to write (netCDF, written atomically)")
-    p.add_argument("--figure", type=pathlib.Path, default=None,
+    p.add_argument("--figure", default=None,
                    help="also write the standard traction-profile figure (PNG)")
     p.add_argument("--tangential", choices=("auto", "scalar", "vector"), default=None,
                    help="override the tangential form")
@@ -44,26 +62,38 @@ def _add_run(sub):
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--resume", action="store_true",
-                   help="resumable run: an interrupted run (Ctrl-C, killed) keeps its part "
-                        "file and checkpoint beside OUT, and the same command continues it")
+                   help="resumable run: an interrupted run (Ctrl-C, SIGTERM, killed) keeps "
+                        "its part file and checkpoint beside OUT, and the same command "
+                        "continues it; a second resumable run of OUT meanwhile exits with 3")
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
-    from ..scene import Scene
-    from ..simulation import simulate
     scene = Scene.from_toml(args.scene)
-    tangential = None if args.tangential in (None, "auto") else args.tangential
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    ds = simulate(scene, args.output, progress=not args.no_progress, tangential=tangential,
-                  fft=args.fft, threads=args.threads, resume=args.resume)
-    print(f"wrote {args.output} ({ds.sizes['time']} instants, {ds.attrs['models']}, "
-          f"{float(ds.attrs['wall_time_s']):.2f} s)")
+    inputs = [args.scene, getattr(scene.geometry, "file", None)]
+    output = check_output_path(args.output, "archive (-o)", inputs=inputs)
+    figure = None
     if args.figure is not None:
-        from .plot import plot_profiles, save_figure
-        args.figure.parent.mkdir(parents=True, exist_ok=True)
-        save_figure(plot_profiles(ds), args.figure)
-        print(f"wrote {args.figure}")
+        figure = check_output_path(args.figure, "figure (--figure)", inputs=inputs)
+        if figure.resolve() == output.resolve():
+            raise OutputPathError(f"figure (--figure) {figure} is also the archive (-o): "
+                                  f"give the figure its own name, e.g. {output.stem}.png")
+    tangential = None if args.tangential in (None, "auto") else args.tangential
+    try:
+        ds = simulate(scene, output, progress=not args.no_progress, tangential=tangential,
+                      fft=args.fft, threads=args.threads, resume=args.resume)
+    except ArchiveError as err:          # the archive could not be written: a failed run
+        if args.debug:
+            raise
+        print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
+        return 1
+    print(f"wrote {output} ({ds.sizes['time']} instants, {ds.attrs['models']}, "
+          f"{float(ds.attrs['wall_time_s']):.2f} s)")
+    if figure is not None:
+        from .plot import plot_profiles, save_figure  # matplotlib: only when a figure is asked
+        figure.parent.mkdir(parents=True, exist_ok=True)
+        save_figure(plot_profiles(ds), figure)
+        print(f"wrote {figure}")
     return 0
 
 
@@ -87,6 +117,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"contactpipe: warning: {one_line(message, with_type=False)}",
+          file=file or sys.stderr)
+
+
+def _error(err, code: int, with_type: bool = False) -> int:
+    print(f"contactpipe: error: {one_line(err, with_type=with_type)}", file=sys.stderr)
+    return code
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -94,20 +134,27 @@ def main(argv=None) -> int:
         parser.print_help(sys.stderr)
         return 2
     try:
-        return int(args.func(args) or 0)
-    except KeyboardInterrupt:
-        print("contactpipe: interrupted", file=sys.stderr)
-        return 130
-    except (SceneError, FileNotFoundError, IsADirectoryError) as err:
+        with signals_as_interrupt(), warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            return int(args.func(args) or 0)
+    except KeyboardInterrupt as err:     # Ctrl-C, and SIGTERM / SIGHUP (Interrupted)
+        signum = getattr(err, "signum", signal.SIGINT)
+        print(f"contactpipe: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+        return 128 + signum
+    except Exception as err:             # noqa: BLE001 - mapped to one line and a status
         if args.debug:
             raise
-        print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
-        return 2
-    except (ContactpipeError, ArchiveError, ValueError, OSError) as err:
-        if args.debug:
-            raise
-        print(f"contactpipe: error: {one_line(err)}", file=sys.stderr)
-        return 1
+        if isinstance(err, LockedError):
+            return _error(err, 3)
+        if isinstance(err, (SceneError, OutputPathError, ArchiveError, FileNotFoundError,
+                            IsADirectoryError)):
+            return _error(err, 2)        # bad input: a file, an argument, an input archive
+        if isinstance(err, MemoryError):
+            return _error(f"out of memory ({one_line(err)}); reduce grid.points or the "
+                          "output kept in memory", 1)
+        if isinstance(err, (ContactpipeError, ValueError, OSError)):
+            return _error(err, 1, with_type=True)
+        raise
 
 
 if __name__ == "__main__":  # pragma: no cover

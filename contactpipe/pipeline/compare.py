@@ -67,7 +67,7 @@ def load_dataset(archive) -> tuple[xr.Dataset, str]:
         return archive, str(archive.attrs.get("title", "dataset"))
     if isinstance(archive, (str, os.PathLike)):
         from ..archive import open_archive
-        return open_archive(archive), str(archive)
+        return open_archive(archive, verify=True), str(archive)
     raise ArchiveError(f"expected an archive path or an xarray.Dataset, got "
                        f"{type(archive).__name__}")
 

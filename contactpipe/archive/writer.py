@@ -1,0 +1,567 @@
+"""Writing archives: streamed step by step (:class:`ArchiveWriter`, :class:`MemoryWriter`)
+or whole (:func:`save`), always atomic, checksummed and checked before they are published.
+
+:class:`ArchiveWriter` streams time steps into a hidden temporary file next to the target
+(``.NAME.<pid>-<token>.part``, or ``.NAME.resumable.part`` for a resumable run) and
+renames it onto the target only in :meth:`~ArchiveWriter.close`, after reading the whole
+file back (schema, coordinates, every value: :func:`contactpipe.archive.content_problems`,
+which also verifies the checksums), setting ``complete = "true"`` and an fsync. On
+:meth:`~ArchiveWriter.abort`, on an exception inside its ``with`` block, or when it is
+garbage-collected unclosed, the temporary file is removed; a resumable writer may instead
+:meth:`~ArchiveWriter.suspend` (keep its part file for a later resume).
+
+Layout on disk: ``time`` unlimited; fields chunked (1, N1, N2), zlib level 1 with shuffle
+when compressed; series in uncompressed chunks of ``SERIES_CHUNK`` steps (a few bytes per
+instant: a series chunk is rewritten at every flush, and uncompressed it keeps its size
+and place, so a part file killed between two flushes still matches its checkpoint); every
+variable, coordinates included, with a fletcher32 checksum per chunk; no fill values;
+floats in float64 or float32 (the precision), ``status`` int8, counts int32, coordinates
+always float64.
+"""
+from __future__ import annotations
+
+import math
+import pathlib
+import time as _time
+import weakref
+
+import netCDF4
+import numpy as np
+import xarray as xr
+
+from ..exceptions import ArchiveError, one_line
+from ..files import publish, temp_name
+from ..nomenclature import FIELD, VARIABLES, cf_attrs
+from .content import content_problems
+from .schema import (
+    COMPLEVEL, SERIES_CHUNK, attr_problems, axis, global_attrs, join_problems,
+    precision_dtype, resumable_part, schema_problems, storable, storage_dtype,
+    variable_problems,
+)
+
+__all__ = ["ArchiveWriter", "MemoryWriter", "to_dataset", "save", "validate"]
+
+
+def validate(ds: xr.Dataset) -> list[str]:
+    """Every way ``ds`` departs from the archive schema and rules; empty when none.
+
+    Checks dimensions and coordinates (present, units, finite, strictly ascending, at
+    least one instant), the variables (known names, required ones present, the tangential
+    outputs when a tangential model ran, dims, units, type, status flags), the global
+    attributes (present, netCDF-storable, ``scene`` readable as TOML, its step count
+    matching the instants), and every value (:func:`content_problems`: NaN or inf, p < 0,
+    h < 0, flags, Coulomb). Lazy data is read block by block.
+    """
+    if not isinstance(ds, xr.Dataset):
+        return [f"expected an xarray.Dataset, got {type(ds).__name__}"]
+    return schema_problems(ds) + content_problems(ds)
+
+
+class _StepWriter:
+    """What both writers share: argument checks, per-step checks, context management."""
+
+    def __init__(self, x1, x2, variables, attrs, precision):
+        self.x1 = axis("x1", x1)
+        self.x2 = axis("x2", x2)
+        self.variables = tuple(variables)
+        self.precision = precision_dtype(precision)
+        self.attrs = global_attrs(attrs)
+        problems = variable_problems(self.variables)
+        problems += attr_problems(self.attrs, required=("scene", "models"))
+        if problems:
+            raise ArchiveError(f"{self._label()}: " + join_problems(problems))
+        self._dtypes = {n: storage_dtype(n, self.precision) for n in self.variables}
+        self.steps = 0
+        self._last_t = None
+        self._done = False
+        self._started = _time.perf_counter()
+
+    def _label(self) -> str:
+        return type(self).__name__
+
+    def _check_value(self, name, dtype, value):
+        """One variable of one instant, cast to its storage type; or a problem (str)."""
+        arr = np.asarray(value)
+        want = (self.x1.size, self.x2.size) if VARIABLES[name]["dims"] == FIELD else ()
+        if want == () and arr.size == 1:
+            arr = arr.reshape(())
+        if arr.shape != want:
+            return f"{name}: shape {arr.shape}, expected {want}"
+        if arr.dtype.kind not in "biuf":
+            return f"{name}: dtype {arr.dtype} is not numeric"
+        finite = np.isfinite(arr)
+        if not finite.all():
+            return f"{name} holds {arr.size - int(finite.sum())} NaN or inf value(s)"
+        if dtype.kind == "i":
+            info = np.iinfo(dtype)
+            if arr.dtype.kind == "f" and np.any(arr != np.round(arr)) \
+                    or arr.min() < info.min or arr.max() > info.max:
+                return f"{name}: values must be integers within {dtype}"
+            arr = arr.astype(dtype)
+            flags = VARIABLES[name].get("flag_values")
+            if flags is not None and not np.isin(arr, flags).all():
+                return (f"{name}: values {np.setdiff1d(arr, flags)} outside flag_values "
+                        f"{list(flags)}")
+            return arr
+        with np.errstate(over="ignore"):   # a float32 overflow is reported just below
+            arr = arr.astype(dtype)
+        if not np.all(np.isfinite(arr)):
+            return f"{name}: exceeds the range of {dtype}"
+        return arr
+
+    def _check_step(self, t, values) -> tuple[float, dict]:
+        """Every value of one instant, checked and cast; raises before anything is kept."""
+        if self._done:
+            raise ArchiveError(f"{self._label()}: already closed or aborted; cannot append")
+        k = self.steps
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise ArchiveError(f"{self._label()}: step {k}: time {t!r} is not a number") from None
+        problems = []
+        if not math.isfinite(t):
+            problems.append(f"time is {t}")
+        elif self._last_t is not None and not t > self._last_t:
+            problems.append(f"time {t:g} s is not after the previous instant {self._last_t:g} s")
+        problems += [f"{n} missing" for n in self.variables if n not in values]
+        problems += [f"{n} not declared when the writer was created"
+                     for n in values if n not in self._dtypes]
+        out = {}
+        for name, dtype in self._dtypes.items():
+            if name in values:
+                arr = self._check_value(name, dtype, values[name])
+                if isinstance(arr, str):
+                    problems.append(arr)
+                else:
+                    out[name] = arr
+        if problems:
+            raise ArchiveError(f"{self._label()}: step {k} (t = {t:g} s) refused, nothing of "
+                               "it written: " + "; ".join(problems))
+        return t, out
+
+    def _commit(self, t: float) -> None:
+        self._last_t = t
+        self.steps += 1
+
+    def _final_attrs(self, attrs) -> dict:
+        """The attributes at close: wall_time_s defaults to the time since creation."""
+        merged = {**self.attrs, **storable(attrs)}
+        merged.pop("complete", None)
+        merged.setdefault("wall_time_s", _time.perf_counter() - self._started)
+        problems = attr_problems(merged)
+        if self.steps == 0:
+            problems.insert(0, "no time step appended")
+        if problems:
+            raise ArchiveError(f"{self._label()}: cannot close, nothing written: "
+                               + join_problems(problems))
+        return merged
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            if not self._done:
+                self.close()
+        else:
+            self.abort()
+        return False
+
+
+def _discard(nc, tmp: pathlib.Path) -> None:
+    """Close the netCDF handle and remove the temporary file (abort and garbage collection)."""
+    try:
+        if nc.isopen():
+            nc.close()
+    except Exception:                      # noqa: BLE001 - cleanup must not mask the cause
+        pass
+    try:
+        tmp.unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
+def _written_problems(file, x1, x2, names, steps: int, whole: bool) -> list[str]:
+    """What is wrong with a written file, read back: its grid, its variables, its instants
+    (exactly ``steps`` when ``whole``, at least ``steps`` for a part file to continue) and
+    every value of the first ``steps`` instants (reading verifies the checksums)."""
+    try:
+        ds = xr.open_dataset(file, engine="netcdf4", decode_timedelta=False)
+    except Exception as e:                 # noqa: BLE001 - HDF/netCDF errors of every kind
+        return [f"unreadable ({one_line(e)})"]
+    with ds:
+        problems = []
+        for name, want in (("x1", x1), ("x2", x2)):
+            if name not in ds.coords or not np.array_equal(ds[name].values, want):
+                problems.append(f"coordinate {name!r} differs from the grid written")
+        if sorted(ds.data_vars) != sorted(names):
+            problems.append(f"variables {sorted(ds.data_vars)}, expected {sorted(names)}")
+        have = ds.sizes.get("time", 0)
+        if whole and have != steps:
+            problems.append(f"{have} instants, expected {steps}")
+        elif have < steps:
+            problems.append(f"the part file holds {have} instants, the checkpoint {steps}")
+        if problems:
+            return problems
+        head = ds.isel(time=slice(0, steps))
+        if whole:
+            return schema_problems(ds) + content_problems(head)
+        t = np.asarray(head["time"].values, dtype=float)
+        if not (np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)):
+            return ["its time coordinate is not finite and ascending"]
+        return content_problems(head)
+
+
+class ArchiveWriter(_StepWriter):
+    """Streams time steps into a netCDF4 archive; the target appears only on :meth:`close`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The archive to write. An existing file there is replaced only by a finished write.
+    x1, x2 : array_like
+        Cell centres [m], strictly ascending.
+    variables : list of str
+        Names from :data:`contactpipe.nomenclature.VARIABLES`; every ``append`` gives
+        exactly these. The required ones (``p``, ``u3``, ``h``, ``status``, ``W``,
+        ``omega3``, ``contact_area``, ``iterations``) must be among them.
+    attrs : dict
+        Global attributes; ``scene`` (TOML text) and ``models`` are required,
+        ``Conventions`` and ``contactpipe_version`` are filled in. Booleans become
+        "true"/"false", None an empty string.
+    precision : {"float64", "float32"}
+        Storage type of the floating-point variables (coordinates stay float64).
+    compress : bool
+        zlib (level 1) with shuffle on every field (series stay uncompressed).
+    resumable : bool
+        Write to the fixed part file ``.NAME.resumable.part`` (:func:`resumable_part`),
+        which :meth:`suspend` keeps for a later run.
+    resume_steps : int, optional
+        Continue the existing part file after this many instants (checked first: its grid,
+        variables and those instants; :class:`ArchiveError` when it is damaged).
+
+    Notes
+    -----
+    The writer keeps nothing per step in memory: each ``append`` goes to disk. A step
+    holding NaN or inf is refused whole (``ArchiveError`` naming variable and step) and the
+    writer stays usable. ``close`` adds the final attributes (``wall_time_s`` defaults to
+    the seconds since the writer was created), reads the file back and refuses to publish
+    it when anything breaks the archive's rules, then sets ``complete = "true"``, fsyncs
+    and renames atomically.
+    """
+
+    def __init__(self, path, x1, x2, variables: list[str], attrs: dict,
+                 precision="float64", compress=True, resumable=False, resume_steps=None):
+        self.path = pathlib.Path(path)
+        super().__init__(x1, x2, variables, attrs, precision)
+        self.compress = bool(compress)
+        self.resumable = bool(resumable)
+        self._tmp = resumable_part(self.path) if resumable else temp_name(self.path)
+        if resume_steps is not None:
+            self._reopen(int(resume_steps))
+            return
+        try:
+            nc = netCDF4.Dataset(self._tmp, mode="w", format="NETCDF4",
+                                 clobber=self.resumable)
+        except Exception as e:             # noqa: BLE001 - reported with the path
+            self._done = True
+            raise ArchiveError(f"{self.path}: cannot create the temporary file "
+                               f"{self._tmp.name} ({one_line(e)})") from e
+        self._nc = nc
+        self._finalizer = weakref.finalize(self, _discard, nc, self._tmp)
+        try:
+            self._define()
+        except BaseException as e:
+            self.abort()
+            if isinstance(e, Exception):
+                raise ArchiveError(f"{self.path}: cannot lay out the archive "
+                                   f"({one_line(e)})") from e
+            raise
+
+    def _label(self) -> str:
+        return str(self.path)
+
+    def _reopen(self, steps: int) -> None:
+        """Continue a resumable write: check its part file, then reopen it after ``steps``
+        instants."""
+        self._done = True                  # until the part file proved usable
+        if not self._tmp.exists():
+            problems = ["the part file is missing"]
+        elif steps < 1:
+            problems = [f"the checkpoint records {steps} instants written"]
+        else:
+            problems = _written_problems(self._tmp, self.x1, self.x2, self.variables, steps,
+                                         whole=False)
+        if problems:
+            raise ArchiveError(f"{self.path}: cannot resume from {self._tmp.name}: "
+                               + join_problems(problems))
+        try:
+            nc = netCDF4.Dataset(self._tmp, mode="a")
+            self._last_t = float(nc["time"][steps - 1])
+        except Exception as e:             # noqa: BLE001 - reported with the path
+            raise ArchiveError(f"{self.path}: cannot resume from {self._tmp.name} "
+                               f"({one_line(e)})") from e
+        self._nc = nc
+        self.steps = steps
+        self._done = False
+        self._finalizer = weakref.finalize(self, _discard, nc, self._tmp)
+
+    def flush(self) -> None:
+        """Push what was appended to disk (before a checkpoint)."""
+        self._nc.sync()
+
+    def suspend(self) -> None:
+        """Close the part file and keep it for a later resume (resumable writers only)."""
+        if not self.resumable:
+            return self.abort()
+        self._finalizer.detach()
+        try:
+            self._nc.close()
+        except Exception:                  # noqa: BLE001 - already broken: nothing to keep
+            pass
+        self._done = True
+
+    def _define(self) -> None:
+        nc = self._nc
+        nc.set_fill_off()
+        nc.createDimension("time", None)
+        nc.createDimension("x1", self.x1.size)
+        nc.createDimension("x2", self.x2.size)
+        for name in ("x1", "x2"):
+            v = nc.createVariable(name, "f8", (name,), fletcher32=True)
+            v.setncatts(cf_attrs(name))
+            v[:] = getattr(self, name)
+        v = nc.createVariable("time", "f8", ("time",), chunksizes=(SERIES_CHUNK,),
+                              fletcher32=True)
+        v.setncatts(cf_attrs("time"))
+        zip_ = {"compression": "zlib", "complevel": COMPLEVEL, "shuffle": True} \
+            if self.compress else {"compression": None}
+        field_chunks = (1, self.x1.size, self.x2.size)
+        for name, dtype in self._dtypes.items():
+            dims = VARIABLES[name]["dims"]
+            field = dims == FIELD
+            v = nc.createVariable(name, dtype, dims, fill_value=False,
+                                  chunksizes=field_chunks if field else (SERIES_CHUNK,),
+                                  fletcher32=True, **(zip_ if field else {"compression": None}))
+            # each chunk is written once: cache one (not the library's 64 MiB per variable),
+            # so memory stays flat however many steps are written
+            v.set_var_chunk_cache(size=int(np.prod(v.chunking())) * dtype.itemsize, nelems=7,
+                                  preemption=1.0)
+            v.setncatts(cf_attrs(name))
+        nc.setncatts(self.attrs)
+
+    def append(self, t: float, values: dict) -> None:
+        """Write one instant: time ``t`` [s] and a value for every declared variable."""
+        t, arrays = self._check_step(t, values)
+        k = self.steps
+        try:
+            self._nc["time"][k] = t
+            for name, arr in arrays.items():
+                self._nc[name][k] = arr
+        except Exception as e:             # noqa: BLE001 - reported with the path
+            raise ArchiveError(f"{self.path}: writing step {k} failed ({one_line(e)})") from e
+        self._commit(t)
+
+    def close(self, attrs: dict | None = None) -> pathlib.Path:
+        """Finish: final attributes, read back and check, ``complete = "true"``, fsync,
+        rename onto the target. Nothing is published when the check finds a problem."""
+        if self._done:
+            raise ArchiveError(f"{self.path}: writer already closed or aborted")
+        try:
+            final = self._final_attrs(attrs)
+            final["complete"] = "true"
+            self._nc.setncatts(final)
+            self._nc.close()
+            problems = _written_problems(self._tmp, self.x1, self.x2, self.variables,
+                                         self.steps, whole=True)
+            if problems:
+                raise ArchiveError(f"{self.path}: not published, the archive written breaks "
+                                   "the archive's rules: " + join_problems(problems))
+            publish(self._tmp, self.path)
+        except BaseException as e:
+            self.abort()
+            if isinstance(e, Exception) and not isinstance(e, ArchiveError):
+                raise ArchiveError(f"{self.path}: closing failed, nothing written "
+                                   f"({one_line(e)})") from e
+            raise
+        self._finalizer.detach()
+        self._done = True
+        return self.path
+
+    def abort(self) -> None:
+        """Drop everything written so far; the target path is left as it was."""
+        finalizer = getattr(self, "_finalizer", None)
+        if finalizer is not None:
+            finalizer()
+        self._done = True
+
+
+class MemoryWriter(_StepWriter):
+    """The :class:`ArchiveWriter` interface, kept in memory; ``close`` returns the Dataset.
+
+    The constructor takes the same arguments, so either class can be chosen by whether a
+    path is given: ``path`` must be None and ``compress`` has no effect in memory. Same
+    checks per step (NaN/inf refused, integer and flag types), same precision and
+    attributes, the same check at close, so ``MemoryWriter(None, ...).close()`` equals
+    ``open_archive`` of what ``ArchiveWriter`` wrote from the same steps (less the
+    ``complete`` attribute).
+    """
+
+    def __init__(self, path, x1, x2, variables: list[str], attrs: dict, precision="float64",
+                 compress=True):
+        if path is not None:
+            raise ArchiveError(f"MemoryWriter: path={str(path)!r}, expected None (it keeps "
+                               "the steps in memory; ArchiveWriter writes a file)")
+        super().__init__(x1, x2, variables, attrs, precision)
+        self._times: list[float] = []
+        self._data: dict[str, list] = {n: [] for n in self.variables}
+
+    def append(self, t: float, values: dict) -> None:
+        """Keep one instant: time ``t`` [s] and a value for every declared variable."""
+        t, arrays = self._check_step(t, values)
+        self._times.append(t)
+        for name, arr in arrays.items():
+            self._data[name].append(arr)
+        self._commit(t)
+
+    def close(self, attrs: dict | None = None) -> xr.Dataset:
+        """The labelled Dataset of every appended step (checked as :func:`validate` does)."""
+        if self._done:
+            raise ArchiveError(f"{self._label()}: writer already closed or aborted")
+        final = self._final_attrs(attrs)
+        data, self._data = self._data, {}
+        ds = to_dataset(self.x1, self.x2, self._times,
+                        {n: np.stack(data.pop(n)) for n in list(data)}, final)
+        self.abort()
+        problems = schema_problems(ds) + content_problems(ds)
+        if problems:
+            raise ArchiveError(f"{self._label()}: the steps appended break the archive's "
+                               "rules: " + join_problems(problems))
+        return ds
+
+    def abort(self) -> None:
+        """Drop every step kept."""
+        self._times, self._data = [], {}
+        self._done = True
+
+
+def to_dataset(x1, x2, times, fields: dict, attrs: dict) -> xr.Dataset:
+    """Label arrays as an archive Dataset.
+
+    Parameters
+    ----------
+    x1, x2 : array_like
+        Cell centres [m], strictly ascending.
+    times : array_like
+        The instants [s], strictly ascending.
+    fields : dict of str -> array_like
+        Variable name -> values, shaped (time, x1, x2) or (time,) as the nomenclature
+        says. Floats stay float32 when given as float32, else become float64; ``status``
+        becomes int8 and counts int32.
+    attrs : dict
+        Global attributes (``Conventions`` and ``contactpipe_version`` are filled in).
+
+    Returns
+    -------
+    xarray.Dataset
+        With ``units``, ``long_name`` (and flags) on every variable and coordinate.
+    """
+    coords = {"time": axis("time", times), "x1": axis("x1", x1), "x2": axis("x2", x2)}
+    sizes = {d: v.size for d, v in coords.items()}
+    problems = variable_problems(fields)
+    data_vars = {}
+    for name, values in fields.items():
+        if name not in VARIABLES:
+            continue
+        entry = VARIABLES[name]
+        arr = np.asarray(values)
+        want = tuple(sizes[d] for d in entry["dims"])
+        if arr.shape != want:
+            problems.append(f"{name}: shape {arr.shape}, expected {want} {entry['dims']}")
+            continue
+        if entry["dtype"] != "float":
+            dtype = np.dtype(entry["dtype"])
+        else:
+            dtype = np.float32 if arr.dtype == np.float32 else np.float64
+        data_vars[name] = xr.Variable(entry["dims"], arr.astype(dtype, copy=False),
+                                      attrs=cf_attrs(name))
+    if problems:
+        raise ArchiveError("to_dataset: " + join_problems(problems))
+    coord_vars = {d: xr.Variable((d,), v, attrs=cf_attrs(d)) for d, v in coords.items()}
+    return xr.Dataset(data_vars, coords=coord_vars, attrs=global_attrs(attrs))
+
+
+def _encoding(ds: xr.Dataset, prec, compress: bool) -> dict:
+    zip_ = {"zlib": True, "complevel": COMPLEVEL, "shuffle": True} if compress \
+        else {"zlib": False}
+    encoding = {}
+    for name, v in ds.variables.items():
+        enc = {"_FillValue": None, "fletcher32": True}
+        if name in VARIABLES:
+            entry = VARIABLES[name]
+            enc["dtype"] = (prec or v.dtype) if entry["dtype"] == "float" \
+                else np.dtype(entry["dtype"])
+            if entry["dims"] == FIELD:
+                enc["chunksizes"] = (1, ds.sizes["x1"], ds.sizes["x2"])
+                enc.update(zip_)
+            else:
+                enc.update(chunksizes=(SERIES_CHUNK,), zlib=False)
+        elif name == "time":
+            enc["chunksizes"] = (SERIES_CHUNK,)
+        encoding[name] = enc
+    return encoding
+
+
+def save(ds: xr.Dataset, path, precision=None, compress=True) -> pathlib.Path:
+    """Write ``ds`` to a netCDF4 archive atomically, after validating it.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An archive Dataset (:func:`to_dataset`, :func:`contactpipe.simulate`,
+        :func:`open_archive`). Boolean and None attributes are converted.
+    path : str or path-like
+        Target file; replaced only once the new archive is complete.
+    precision : {None, "float64", "float32"}
+        Storage type of floating-point variables; None keeps each variable's own.
+    compress : bool
+        zlib level 1 with shuffle on the fields (series stay uncompressed).
+
+    Returns
+    -------
+    pathlib.Path
+        The archive written, with global attribute ``complete = "true"``.
+
+    Raises
+    ------
+    ArchiveError
+        Listing every problem :func:`validate` finds, before a byte is written; or when
+        writing fails (then nothing is left at ``path`` but what was there before).
+    """
+    path = pathlib.Path(path)
+    if not isinstance(ds, xr.Dataset):
+        raise ArchiveError(f"{path}: not saved: expected an xarray.Dataset, got "
+                           f"{type(ds).__name__}")
+    prec = None if precision is None else precision_dtype(precision)
+    ds = ds.drop_encoding()
+    ds.attrs = storable(ds.attrs)
+    ds.attrs.pop("complete", None)
+    for v in ds.variables.values():
+        v.attrs = storable(v.attrs)
+    problems = validate(ds)
+    if problems:
+        raise ArchiveError(f"{path}: not saved, the dataset does not follow the archive "
+                           "schema: " + join_problems(problems))
+    ds.attrs["complete"] = "true"
+    tmp = temp_name(path)
+    try:
+        ds.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4",
+                     encoding=_encoding(ds, prec, compress), unlimited_dims=["time"])
+        publish(tmp, path)
+    except BaseException as e:
+        tmp.unlink(missing_ok=True)
+        if isinstance(e, Exception) and not isinstance(e, ArchiveError):
+            raise ArchiveError(f"{path}: writing failed, nothing written "
+                               f"({one_line(e)})") from e
+        raise
+    return path

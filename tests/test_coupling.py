@@ -1,0 +1,142 @@
+"""The middle loop (solver.coupling.solve_instant) on plain arrays: passes, contact laws of
+the converged instant, and failures that name the sub-problem.
+
+One instant of a sphere (R = 18 mm) pressed by W = 1 kN and sheared by T1 = 0.5 mu W
+(mu = 0.1) on a 32 x 32 grid over 4 a_Hertz, starting from rest, solved at tolerance 1e-9.
+"""
+import warnings
+
+import numpy as np
+import pytest
+
+import contactpipe as cp
+from contactpipe.simulation import grid_coordinates
+from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
+from contactpipe.solver.normal import solve_normal
+from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
+
+from conftest import A_HERTZ, MU, STEEL, W, make_scene
+
+ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
+TOL = 1e-9
+T1 = 0.5 * MU * W
+LIMITS = Tolerances(TOL, 2000, 100)
+
+
+def instant(indenter, halfspace, n=32, tangential="scalar"):
+    """(op, gap, U, cell, plan, Previous at rest) of the scene's first instant."""
+    scene = make_scene(indenter=indenter, halfspace=halfspace, friction={"mu": MU},
+                       load={"time": [0.0, 1.0], "normal_force": W,
+                             "tangential_force": [T1, T1]},
+                       grid={"points": [n, n], "size": [4 * A_HERTZ, 4 * A_HERTZ]},
+                       solver={"tangential": tangential})
+    x1, x2, d1, d2 = grid_coordinates(scene)
+    gap = np.asarray(scene.geometry.gap(x1, x2), dtype=float)
+    conv = convolver(n, n, "scipy", 1)
+    spectra = [body_spectra(b, n, n, d1, d2, "scipy", 1)
+               for b in (scene.indenter.body(), scene.halfspace.body())]
+    op = ContactOperator(*spectra, 1.0, 1.0, conv)
+    rest = Previous(np.zeros((2, n, n)), np.zeros((3, n, n)), np.zeros((n, n)))
+    return op, gap, np.zeros((3, n, n)), d1 * d2, cp.plan(scene), rest
+
+
+def test_identical_bodies_take_one_pass():
+    """beta = 0 (steel on steel): no coupling loop, one normal and one tangential solve."""
+    op, gap, U, cell, plan, rest = instant(STEEL, STEEL)
+    assert plan.coupling == "none"
+    res = solve_instant(op, gap, U, W, [T1, 0.0], cell, MU, plan, rest, LIMITS)
+    assert res.converged and res.failed == ""
+    assert res.passes == 1
+
+
+@pytest.mark.parametrize("tangential", ["scalar", "vector"])
+def test_steel_on_aluminium_converges_to_both_laws(tangential):
+    """beta != 0: the passes settle (measured: 7 one-component, 6 vector) on a state where
+    the normal and the tangential problems both hold:
+
+    * p >= 0, sum p cell = W and sum q1 cell = T1 to 1e-9 relative (measured 5e-16);
+    * the gap h = gap + u3 - omega3 is >= -1e-9 max|u3| everywhere and within 1e-6 max|u3|
+      of zero where p > 0 (measured 1.3e-10 and 1e-10: the CG tolerance acts on the force
+      balance);
+    * |q| <= mu p (1 + 1e-9);
+    * stick cells (|q| < mu p) do not slip: |domega - u_in-plane| <= 1e-6 max|u_in-plane|
+      (measured 1.2e-10 and 1.4e-9; along x1 only for the one-component form, which leaves
+      u2 free);
+    * re-solving the normal problem against the final shear moves the pressure by
+      sum |dp| cell / W < tolerance 1e-9 (measured 2.4e-10 and 1.0e-10).
+    """
+    op, gap, U, cell, plan, rest = instant(STEEL, ALUMINIUM, tangential=tangential)
+    assert plan.coupling == "gauss_seidel" and plan.tangential == tangential
+    res = solve_instant(op, gap, U, W, [T1, 0.0], cell, MU, plan, rest, LIMITS)
+    assert res.converged, (res.failed, res.residual)
+    assert 1 < res.passes <= LIMITS.max_passes
+    p, q, u = res.p, res.q, res.u
+    assert p.min() >= 0.0
+    assert abs(p.sum() * cell - W) <= 1e-9 * W
+    assert abs(q[0].sum() * cell - T1) <= 1e-9 * W
+    assert abs(q[1].sum() * cell) <= 1e-9 * W
+    h = gap + u[2] - res.omega3
+    scale = np.abs(u[2]).max()
+    assert h.min() >= -1e-9 * scale, h.min() / scale
+    assert np.abs(h[p > 0]).max() <= 1e-6 * scale, np.abs(h[p > 0]).max() / scale
+    qn = np.hypot(q[0], q[1])
+    assert np.all(qn <= MU * p * (1 + 1e-9))
+    stick = (p > 0) & (qn < MU * p * (1 - 1e-6))
+    assert stick.any()
+    slip = res.domega[:, None, None] - u[:2]            # from rest: u_prev = 0
+    held = slice(0, 2) if tangential == "vector" else slice(0, 1)   # scalar: q2 = 0 only
+    assert np.abs(slip[held][:, stick]).max() <= 1e-6 * np.abs(u[:2]).max()
+    # the normal problem, solved again under the final shear, hardly moves
+    u3q = op.coupling_to_normal(q[0], q[1] if tangential == "vector" else None)
+    again = solve_normal(op, gap + U[2] + u3q, W, cell, p, TOL, LIMITS.max_iter)
+    assert again.converged
+    change = np.abs(again.p - p).sum() * cell / W
+    assert change < TOL, change
+
+
+def test_failures_name_the_sub_problem():
+    """Each way an instant can stop says which solve stopped."""
+    op, gap, U, cell, plan, rest = instant(STEEL, ALUMINIUM)
+    res = solve_instant(op, gap, U, W, [T1, 0.0], cell, MU, plan, rest,
+                        Tolerances(TOL, 3, 100))
+    assert not res.converged and res.failed == "normal" and res.residual > TOL
+    res = solve_instant(op, gap, U, W, [T1, 0.0], cell, MU, plan, rest,
+                        Tolerances(TOL, 2000, 1))
+    assert not res.converged and res.failed == "coupling" and res.passes == 1
+    # a tangential force above mu W: no shear within the bounds carries it (alone, the
+    # one-component solver clipped q to mu p and carried mu W; the vector one gave NaN)
+    for tangential in ("scalar", "vector"):
+        op, gap, U, cell, plan, rest = instant(STEEL, ALUMINIUM, tangential=tangential)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            res = solve_instant(op, gap, U, W, [1.5 * MU * W, 0.0], cell, MU, plan, rest,
+                                LIMITS)
+        assert not res.converged and res.failed == "tangential"
+        assert res.residual == pytest.approx(0.5, rel=1e-12)      # (|T| - mu W) / (mu W)
+
+
+def test_the_previous_normal_solution_is_reused_as_is():
+    """Previous.normal (no coupling, same W) skips the normal solve: no iterations spent
+    on it, the same pressure object."""
+    op, gap, U, cell, plan, rest = instant(STEEL, STEEL)
+    first = solve_instant(op, gap, U, W, [T1, 0.0], cell, MU, plan, rest, LIMITS)
+    again = solve_instant(op, gap, U, W, [T1, 0.0], cell, MU, plan,
+                          Previous(first.q, first.u, first.p, first.normal), LIMITS)
+    assert again.converged and again.p is first.normal.p
+    assert again.iterations < first.iterations
+
+
+def test_simulate_names_the_failed_sub_problem():
+    """simulate turns a failure into one ConvergenceError naming the solve and the step."""
+    scene = make_scene(indenter=STEEL, halfspace=ALUMINIUM, friction={"mu": MU},
+                       load={"time": [0.0, 1.0], "normal_force": W,
+                             "tangential_force": [0.0, T1]},
+                       grid={"points": [24, 24], "size": [4 * A_HERTZ, 4 * A_HERTZ]},
+                       solver={"max_coupling_passes": 1})
+    with pytest.raises(cp.ConvergenceError, match=r"^coupling problem at step 0 \(t = 0 s\)"
+                                                   r".*did not settle in 1 passes"):
+        cp.simulate(scene)
+    scene = scene.replace({"solver.max_iterations": 2, "solver.max_coupling_passes": 100})
+    with pytest.raises(cp.ConvergenceError, match=r"^normal problem at step 0 .* stopped "
+                                                   r"after \d+ iterations"):
+        cp.simulate(scene)
