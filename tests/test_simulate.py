@@ -9,7 +9,7 @@ import xarray as xr
 import contactpipe as cp
 from contactpipe.pipeline.cli import main as cli_main
 
-from conftest import W, fretting_scene
+from helpers import W, fretting_scene
 
 FIELDS = {"p": "Pa", "u3": "m", "h": "m"}
 SERIES = {"W": "N", "omega3": "m", "contact_area": "m2", "iterations": "1"}
