@@ -68,7 +68,7 @@ def spd_matrix(rng, n, cond=50.0):
 
 def box_qp_exact(A, b, lo, hi, target):
     """Exact minimiser of ½ xᵀAx + bᵀx over {lo ≤ x ≤ hi, Σx = target} by enumerating the
-    active sets (3ⁿ: each cell at lo, free or at hi; for n ≤ 8), independent of the CG.
+    active sets (3ᵐ for m movable cells: each at lo, free or at hi; for m ≤ 8), independent of the CG.
 
     For each guess the free cells solve the equality-constrained KKT system; the guess is
     the solution when the free cells lie within their bounds and the residual
@@ -86,8 +86,9 @@ def box_qp_exact(A, b, lo, hi, target):
     movable = lo < hi
     scale = 1.0 + np.abs(b).max() + np.abs(A).max() * (np.abs(np.where(np.isfinite(hi), hi, 0)).max()
                                                         + np.abs(lo).max() + abs(target))
-    for states in itertools.product((0, 1, 2), repeat=n):
-        st = np.where(movable, np.array(states), 0)
+    for states in itertools.product((0, 1, 2), repeat=int(movable.sum())):
+        st = np.zeros(n, int)
+        st[movable] = states
         if np.any((st == 2) & ~np.isfinite(hi)):
             continue
         x = np.where(st == 2, hi, lo).astype(float)
