@@ -8,11 +8,14 @@ through ``pythonpath`` in pyproject's ``[tool.pytest.ini_options]``); fixtures s
 import itertools
 
 import numpy as np
+from scipy import integrate
 
 import contactpipe as cp
+from contactpipe import analytic as an
 
 __all__ = ["STEEL", "R", "W", "MU", "E_STAR_STEEL", "A_HERTZ", "P0_HERTZ", "make_scene",
-           "fretting_scene", "spd_matrix", "box_qp_exact", "box_kkt_violation"]
+           "fretting_scene", "spd_matrix", "box_qp_exact", "box_kkt_violation", "radial_force",
+           "md_circles"]
 
 # the paper's elastic case: steel on steel, R = 18 mm, W = 1 kN (Hertz: p0 = 1.996 GPa, a = 0.489 mm)
 STEEL = {"material": "elastic", "young": 210e9, "poisson": 0.3}
@@ -143,3 +146,25 @@ def box_kkt_violation(A, b, lo, hi, target, x, lam):
         float(np.max(r[at_hi], initial=0.0)) / gs,
     ]
     return max(parts)
+
+
+# --------------------------------------------------------------------------- closed forms
+def radial_force(f, a, breaks=(), epsabs=0.0):
+    """int_0^a 2 pi r f(r) dr, split at the given radii (quad: epsrel 1e-12, epsabs)."""
+    pts = sorted({0.0, a, *[float(b) for b in breaks if 0.0 < b < a]})
+    total = 0.0
+    for lo, hi in zip(pts[:-1], pts[1:]):
+        total += integrate.quad(lambda r: 2 * np.pi * r * float(f(r)), lo, hi,
+                                epsabs=epsabs, epsrel=1e-12, limit=200)[0]
+    return total
+
+
+def md_circles(history, a, mu_w):
+    """Radii [m] of the stick/slip circles of the Mindlin-Deresiewicz traction after a
+    tangential force history: one per superposed Cattaneo term (where q has a kink)."""
+    rev, t = an.masing_memory(history)
+    pts = list(rev) + [t]
+    out = [a * (1 - abs(pts[0]) / mu_w) ** (1 / 3)]
+    out += [a * (1 - abs(pts[k + 1] - pts[k]) / (2 * mu_w)) ** (1 / 3)
+            for k in range(len(pts) - 1)]
+    return out
