@@ -58,7 +58,7 @@ def objective(A, b, x):
 def test_box_cg_equals_the_exact_active_set_solution(seed, kind, restore):
     """n = 7, from x0 = 0 (the one-sided start falls back to a uniform x): x within
     1e-12 (max|x*| ~ 1) of the enumerated solution and λ within 1e-12 of its multiplier
-    (measured: 7e-16 and 7e-15 at most), converged in fewer than 100 iterations."""
+    (measured: 7e-16 and 3e-15 at most), converged in fewer than 100 iterations."""
     A, b, lo, hi, target = problem(seed, 7, kind)
     x_ex, lam_ex = box_qp_exact(A, b, lo, hi, target)
     r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(7), tol=1e-12, max_iter=100,
@@ -85,13 +85,13 @@ def test_box_cg_keeps_fixed_cells_at_their_value():
     np.testing.assert_allclose(r.x, x_ex, rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", range(2))
 @pytest.mark.parametrize("kind, restore", [("two-sided", "shift"), ("one-sided", "scale")])
 def test_box_cg_kkt_and_slsqp_on_forty_cells(seed, kind, restore):
     """n = 40, eigenvalues in [1, 50]: the optimality conditions hold to 1e-11 (bounds and
-    force relative to Σ|x|, the residual's signs relative to max|Ax + b|; measured ≤ 4e-15),
-    and scipy's SLSQP (ftol 1e-15) lands on the same point within 1e-6 (measured 4e-9 at
-    most; SLSQP is the less accurate of the two) with an objective no lower than box_cg's
+    force relative to Σ|x|, the residual's signs relative to max|Ax + b|; measured ≤ 5e-15),
+    and scipy's SLSQP (ftol 1e-15) lands on the same point within 1e-6 of max|x| (measured
+    1.2e-8 at most; SLSQP is the less accurate of the two) with an objective no lower than box_cg's
     by more than 1e-10 |f|."""
     n = 40
     A, b, lo, hi, target = problem(100 + seed, n, kind)
@@ -147,8 +147,8 @@ def test_box_cg_scaled_warm_start_is_one_iteration():
 
 @pytest.mark.parametrize("kind, restore", [("two-sided", "shift"), ("one-sided", "scale")])
 def test_box_cg_iteration_cap_reports_not_converged(kind, restore):
-    """max_iter = 2 on n = 40 (it needs about 80): converged is False, iterations == 2 and
-    the residual (measured 0.18-0.25) is above the tolerance; the iterate stays feasible
+    """max_iter = 2 on n = 40 (it needs 23 and 35): converged is False, iterations == 2 and
+    the residual (measured 0.11 and 0.37) is above the tolerance; the iterate stays feasible
     (bounds exactly, force to 1e-12)."""
     A, b, lo, hi, target = problem(11, 40, kind)
     r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(40), tol=1e-12, max_iter=2,
@@ -181,7 +181,7 @@ def test_box_cg_unattainable_force_is_not_converged(sign):
 def test_fista_on_a_box_sum_set(seed):
     """Accelerated projected gradient with L = λmax(A) on the two-sided problem (n = 7,
     cond 50), natural-residual tolerance 1e-12: converged, x within 1e-7 of the enumerated
-    solution (measured 1e-9; the error is the residual times the conditioning), feasible,
+    solution (measured 5e-11 at most in 140-210 iterations), feasible,
     and A x returned consistent with x to 1e-12. With a cap of 3 iterations: not
     converged, 3 iterations."""
     A, b, lo, hi, target = problem(seed, 7, "two-sided")

@@ -195,7 +195,7 @@ def direction_of(history):
     return 1.0 if history[-1] > prev else -1.0
 
 
-@settings(max_examples=40)
+@settings(max_examples=25)
 @given(histories)
 def test_masing_traction_is_bounded_and_carries_the_force(history):
     """|q(r)| <= mu p(r) (1 + 1e-10) + 1e-9 mu p0 on 0 <= r <= 1.1 a, q = 0 outside the

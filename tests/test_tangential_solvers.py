@@ -263,8 +263,10 @@ def full_slip(elastic):
     u_scale = float(np.abs(elastic @ np.concatenate([rho.ravel(), rho.ravel()])).max())
     b = -3.0 * u_scale * np.stack([X1, X2]) / RADIUS * (rho > 0)
     T = np.array([0.3 * rho.sum() * AREA, 0.0])
+    # the CG stalls without stick cells; max_iter sets the budget of each CG try before the
+    # projected-gradient fallback (5000 gives the same q in 2548 iterations, 400 in 248)
     res = solve_vector(DenseOperator(elastic, (N, N)), b, rho, T, AREA, np.zeros((2, N, N)),
-                       1e-10, 5000)
+                       1e-10, 400)
     return rho, b, T, res
 
 
@@ -335,6 +337,7 @@ def test_multiplier_follows_a_rigid_shift(elastic, form, regime):
     else:
         b = -3.0 * u_scale * np.stack([X1, X2]) / RADIUS * cells
         frac = 0.0 if form == "scalar" else 0.3
+    budget = 5000 if regime == "partial slip" else 400     # see the full_slip fixture
     T = np.array([frac * rho.sum() * AREA, 0.0])
     c = 0.3 * u_scale * np.array([1.0, -0.5])
     op = DenseOperator(elastic, (N, N))
@@ -342,7 +345,7 @@ def test_multiplier_follows_a_rigid_shift(elastic, form, regime):
         solve = lambda bb: solve_scalar(op, bb[0], rho, T[0], AREA, np.zeros((N, N)), 1e-12, 2000)  # noqa: E731
         c[1] = 0.0
     else:
-        solve = lambda bb: solve_vector(op, bb, rho, T, AREA, np.zeros((2, N, N)), 1e-10, 5000)  # noqa: E731
+        solve = lambda bb: solve_vector(op, bb, rho, T, AREA, np.zeros((2, N, N)), 1e-10, budget)  # noqa: E731
     r0 = solve(b)
     r1 = solve(b + c[:, None, None] * cells)
     assert r0.converged and r1.converged
@@ -368,7 +371,7 @@ def disk_sets(draw, max_n=10):
     return y, rho, target
 
 
-@settings(max_examples=100)
+@settings(max_examples=50)
 @given(disk_sets())
 def test_disk_project_is_the_cellwise_projection(data):
     """Per cell: |P| ≤ ρ (1 + 1e-15), P = y where |y| ≤ ρ, P = ρ y/|y| (radial) outside and
