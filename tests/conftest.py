@@ -1,46 +1,13 @@
-"""Small scenes shared by the tests (no test depends on ../shared)."""
-import numpy as np
+"""Fixtures and test-session settings (helpers live in tests/helpers.py)."""
 import pytest
+from hypothesis import settings
 
-import contactpipe as cp
-
-# the paper's elastic case: steel on steel, R = 18 mm, W = 1 kN (Hertz: p0 = 1.996 GPa, a = 0.489 mm)
-STEEL = {"material": "elastic", "young": 210e9, "poisson": 0.3}
-R, W, MU = 0.018, 1000.0, 0.1
-E_STAR_STEEL = 1.0 / (2 * (1 - 0.3 ** 2) / 210e9)
-A_HERTZ = (3 * W * R / (4 * E_STAR_STEEL)) ** (1 / 3)
-P0_HERTZ = 3 * W / (2 * np.pi * A_HERTZ ** 2)
-
-
-def make_scene(**over):
-    """A scene dict with sensible defaults; keyword tables replace or extend the defaults."""
-    d = {
-        "name": "test",
-        "geometry": {"shape": "sphere", "radius": R},
-        "indenter": dict(STEEL),
-        "halfspace": dict(STEEL),
-        "load": {"time": [0.0, 1.0], "normal_force": W},
-        "grid": {"points": [64, 64], "size": [4 * A_HERTZ, 4 * A_HERTZ]},
-        "time": {"steps": 1},
-    }
-    for k, v in over.items():
-        if v is None:
-            d.pop(k, None)
-        elif isinstance(v, dict) and isinstance(d.get(k), dict) and k not in ("indenter", "halfspace", "load", "geometry"):
-            d[k] = {**d[k], **v}
-        else:
-            d[k] = v
-    return cp.Scene(**d)
-
-
-def fretting_scene(n=128, steps=40, size=3.0, mu=MU, amplitude=0.9, **over):
-    """The paper's elastic fretting loop: T: 0 -> +T* -> -T* -> +T* with T* = 0.9 mu W."""
-    Ts = amplitude * mu * W
-    return make_scene(friction={"mu": mu},
-                      load={"time": [0.0, 0.2, 0.6, 1.0], "normal_force": W,
-                            "tangential_force": [0.0, Ts, -Ts, Ts]},
-                      grid={"points": [n, n], "size": [size * A_HERTZ, size * A_HERTZ]},
-                      time={"steps": steps}, **over)
+# property tests: no per-example deadline (the machine may be busy) and the same examples
+# on every run (a failure reproduces); `--hypothesis-profile=explore` draws fresh random
+# examples, 500 where a test sets no max_examples
+settings.register_profile("suite", deadline=None, derandomize=True)
+settings.register_profile("explore", deadline=None, max_examples=500)
+settings.load_profile("suite")
 
 
 @pytest.fixture

@@ -5,7 +5,7 @@ import pytest
 import contactpipe as cp
 from contactpipe.accuracy import PRESETS, resolve_accuracy
 
-from conftest import fretting_scene
+from helpers import fretting_scene
 
 
 def test_presets_order_and_choice_recorded():

@@ -7,6 +7,8 @@ from contactpipe import analytic as an
 from contactpipe import materials as mat
 from contactpipe.exceptions import GrossSlidingError
 
+from helpers import md_circles, radial_force
+
 # the paper's steel-on-steel case
 E_STEEL, NU_STEEL = 210e9, 0.3
 R_BALL, W = 0.018, 1000.0
@@ -16,16 +18,6 @@ HZ = an.hertz_sphere(W, R_BALL, E_STAR)
 A, P0 = HZ.contact_radius, HZ.max_pressure
 C_SUM = an.tangential_compliance_sum(E_STEEL, NU_STEEL, E_STEEL, NU_STEEL)
 MUW = MU * W
-
-
-def radial_force(f, a, breaks=()):
-    """int_0^a 2 pi r f(r) dr, split at the given radii."""
-    pts = sorted({0.0, a, *[float(b) for b in breaks if 0.0 < b < a]})
-    total = 0.0
-    for lo, hi in zip(pts[:-1], pts[1:]):
-        total += integrate.quad(lambda r: 2 * np.pi * r * float(f(r)), lo, hi,
-                                epsabs=0.0, epsrel=1e-12, limit=200)[0]
-    return total
 
 
 # --------------------------------------------------------------------------- Hertz
@@ -263,12 +255,7 @@ HISTORIES = {
 
 
 def _circles(hist):
-    rev, t = an.masing_memory(hist)
-    pts = list(rev) + [t]
-    out = [A * (1 - abs(pts[0]) / MUW) ** (1 / 3)]
-    out += [A * (1 - abs(pts[k + 1] - pts[k]) / (2 * MUW)) ** (1 / 3)
-            for k in range(len(pts) - 1)]
-    return out
+    return md_circles(hist, A, MUW)
 
 
 @pytest.mark.parametrize("name", sorted(HISTORIES))

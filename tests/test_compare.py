@@ -13,7 +13,7 @@ from contactpipe.pipeline.compare import compare
 from contactpipe.pipeline.reference import closed_form_for, iwan_dissipation
 from contactpipe.exceptions import ArchiveError, SceneError
 
-from conftest import A_HERTZ, W, fretting_scene, make_scene
+from helpers import A_HERTZ, W, fretting_scene, make_scene
 
 MD_VARIABLES = ("err_p_max", "err_p_rms", "err_contact_radius", "err_omega3", "err_q1_max",
                 "err_q1_max_interior", "err_q1_max_all", "err_q1_rms",

@@ -8,7 +8,7 @@ import pytest
 import contactpipe as cp
 from contactpipe import analytic as an
 
-from conftest import A_HERTZ, E_STAR_STEEL, P0_HERTZ, R, W, make_scene
+from helpers import A_HERTZ, E_STAR_STEEL, P0_HERTZ, R, W, make_scene
 
 ONE_INSTANT = {"time": [0.0], "normal_force": W}
 

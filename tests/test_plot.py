@@ -10,7 +10,7 @@ from contactpipe.pipeline import plot
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.exceptions import ArchiveError
 
-from conftest import fretting_scene
+from helpers import fretting_scene
 
 SHAPE = (500, 800, 4)      # 8 x 5 in at 100 dpi, RGBA
 

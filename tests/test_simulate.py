@@ -12,7 +12,7 @@ from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.simulation import State
 from contactpipe.solver.memory import make_memory
 
-from conftest import W, fretting_scene
+from helpers import W, fretting_scene
 
 FIELDS = {"p": "Pa", "u3": "m", "h": "m"}
 SERIES = {"W": "N", "omega3": "m", "contact_area": "m2", "iterations": "1"}

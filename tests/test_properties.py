@@ -1,0 +1,267 @@
+"""Hypothesis properties: the contact laws on small random scenes, and Masing's memory rules
+of the Mindlin-Deresiewicz closed form.
+
+(The projection properties of the solvers are in test_cg.py and test_tangential_solvers.py.)
+"""
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+import contactpipe as cp
+from contactpipe import analytic as an
+from contactpipe.planning import pair_couples
+from contactpipe.testing import assert_contact_laws
+
+from helpers import W, make_scene, md_circles, radial_force
+
+# --------------------------------------------------------------------------- contact laws
+STEEL = {"material": "elastic", "young": 210e9, "poisson": 0.3}
+ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
+RIGID = {"material": "rigid"}
+RUBBER = {"material": "elastic", "young": 5e9, "poisson": 0.5}
+MAXWELL = {"material": "viscoelastic", "young": 105e9, "poisson": 0.3, "creep": "maxwell",
+           "relaxation_time": 1.0}
+
+#: (indenter, half-space, oblique loads allowed). Oblique (x2) loads run the vector form;
+#: on the strongly coupled rigid/compressible pair its frictional preload is slow (measured
+#: on 12², mu = 0.2, one step: 27 s and 7253 iterations against 0.12 s and 449 for the
+#: scalar form on the same x1 load, most of it in the vector force restoration), so that
+#: pair is loaded along x1 here.
+PAIRS = {
+    "steel/steel (beta = 0)": (STEEL, STEEL, True),
+    "steel/aluminium (beta != 0)": (STEEL, ALUMINIUM, True),
+    "rigid/incompressible (beta = 0)": (RIGID, RUBBER, True),
+    "Maxwell/Maxwell (beta = 0)": (MAXWELL, MAXWELL, True),
+    "rigid/Maxwell (the paper's, beta != 0)": (RIGID, MAXWELL, False),
+}
+
+
+@st.composite
+def small_scenes(draw):
+    """A small random scene within partial slip: grid 12², 16² or 20² (size from the Hertz
+    estimate), 2-4 steps with a load knot at every instant, mu in [0.05, 0.5], radius in
+    [5, 50] mm, W = 1 kN, |T| <= 0.9 mu W at each knot along a random direction (x1 only
+    where noted), frictional or frictionless preload. FFTs by scipy: its rounding is the
+    same in every process (pyFFTW's measured plans vary), so an example reproduces.
+
+    Two exclusions, each a defect pinned by a strict xfail below (widen the strategy when
+    they are fixed): after the initial instant |T| >= 0.01 mu W, since T = 0 on the coupled
+    rigid/Maxwell pair lets every cell slip and the shift increment then breaks the slip
+    direction (test_full_slip_instant_keeps_the_contact_laws); and no two knots carry the
+    same force, since a step that returns exactly to an earlier force (or holds it)
+    dissipates nothing and rounding then decides the sign of the dissipation increment
+    (test_dissipation_rounding_is_not_a_violation).
+    """
+    name = draw(st.sampled_from(sorted(PAIRS)))
+    indenter, halfspace, oblique = PAIRS[name]
+    steps = draw(st.integers(2, 4))
+    mu = draw(st.floats(0.05, 0.5))
+    knot = st.floats(-0.9, 0.9).filter(lambda f: abs(f) >= 0.01)
+    fracs = [0.0] + draw(st.lists(knot, min_size=steps, max_size=steps, unique=True))
+    angle = draw(st.floats(0.0, np.pi)) if (oblique and draw(st.booleans())) else 0.0
+    T = [[f * mu * W * np.cos(angle), f * mu * W * np.sin(angle)] for f in fracs]
+    n = draw(st.sampled_from([12, 16, 20]))
+    return make_scene(
+        name=name, indenter=dict(indenter), halfspace=dict(halfspace), friction={"mu": mu},
+        geometry={"shape": "sphere", "radius": draw(st.floats(0.005, 0.05))},
+        load={"time": list(np.linspace(0.0, 1.0, steps + 1)), "normal_force": W,
+              "tangential_force": T, "preload": draw(st.sampled_from(["frictional",
+                                                                     "frictionless"]))},
+        grid={"points": [n, n], "size": "auto"}, time={"steps": steps}, solver={"fft": "scipy"})
+
+
+def check_contact_laws(scene):
+    """simulate (no warning of any kind) and every law of contactpipe.testing at rtol 1e-9:
+    equilibrium, complementarity, Coulomb, dissipation >= 0 and non-decreasing, no slip
+    increment in stick cells; every field finite; coupling iff the pair couples."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ds = cp.simulate(scene)
+    assert_contact_laws(ds)
+    for name, var in ds.data_vars.items():
+        if np.issubdtype(var.dtype, np.floating):
+            assert np.all(np.isfinite(var.values)), name
+    couples = pair_couples(scene.indenter.body(), scene.halfspace.body())
+    assert ("coupling=gauss_seidel" in ds.attrs["models"]) == couples
+
+
+@settings(max_examples=15)
+@given(small_scenes())
+def test_contact_laws_on_small_random_scenes(scene):
+    """15 examples (measured: about 0.1 s each)."""
+    check_contact_laws(scene)
+
+
+@pytest.mark.slow
+@settings(max_examples=150)
+@given(small_scenes())
+def test_contact_laws_on_many_small_random_scenes(scene):
+    """150 examples of the same (a few minutes)."""
+    check_contact_laws(scene)
+
+
+def _paper_pair_held_at_zero_shear(steps_T):
+    """Rigid ball (R = 31.25 mm) on the paper's Maxwell half-space (nu = 0.3, coupled),
+    mu = 0.0546875, W = 1 kN held for 1 s, T1 at the given knots, 12² auto grid."""
+    return make_scene(
+        indenter=dict(RIGID), halfspace=dict(MAXWELL), friction={"mu": 0.0546875},
+        geometry={"shape": "sphere", "radius": 0.03125},
+        load={"time": list(np.linspace(0.0, 1.0, len(steps_T))), "normal_force": W,
+              "tangential_force": list(steps_T)},
+        grid={"points": [12, 12], "size": "auto"}, time={"steps": len(steps_T) - 1},
+        solver={"fft": "scipy"})
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "full-slip instant: rigid ball on the paper's Maxwell half-space, mu = 0.0547, W = 1 kN "
+    "and T = 0 held for 1 s, 12x12 auto grid, 2 steps (scipy FFT; pyFFTW alike): at step 1 "
+    "all 44 contact cells slip (Spence shear while the body creeps), the solver's shift "
+    "increment is not pinned by any stick cell, omega1 jumps to -1.75e-7 m although the "
+    "problem is symmetric in x1, and 14 slipping cells get q.ds < 0 (down to -8.96 Pa m); "
+    "see test_tangential_solvers.py::test_multiplier_follows_a_rigid_shift for the solver "
+    "unit"))
+def test_full_slip_instant_keeps_the_contact_laws():
+    """Found by the property above (with T = 1.2e-307 N). The laws hold and, the scene
+    being symmetric under x1 -> -x1 with T = 0, omega1 stays 0 (1e-12 of the approach)."""
+    ds = cp.simulate(_paper_pair_held_at_zero_shear([0.0, 0.0, 0.0]))
+    assert_contact_laws(ds)
+    assert np.abs(ds.omega1.values).max() <= 1e-12 * float(ds.omega3.values.max())
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "contact_law_violations flags 'dissipation decreases' for a dip of 1.9e-13 J in an "
+    "accumulated dissipation of 4.4e-4 J (threshold 1e-12 of the maximum, 4.4e-16 J), far "
+    "below what the solver resolves (mu W tol |omega1| = 1.3e-11 J at tol 1e-9). simulate "
+    "produces such dips: rigid ball on nu = 0.5, mu = 0.5, T1 = 0, -300.78, -281.25, "
+    "-300.78 N, 12x12 auto grid, 3 steps; the last step returns to the earlier extreme and "
+    "dissipates nothing, and with pyFFTW its increment came out -7.3e-14 to -8.9e-14 J in 3 "
+    "of 6 processes (FFTW_MEASURE plans differ), +9.8e-14 J in the others and with scipy"))
+def test_dissipation_rounding_is_not_a_violation():
+    """The scipy archive of that scene passes; the same archive with the last dissipation
+    value lowered by the 1.9e-13 J that pyFFTW's rounding moved it by must pass too."""
+    scene = make_scene(
+        indenter=dict(RIGID), halfspace=dict(RUBBER), friction={"mu": 0.5},
+        geometry={"shape": "sphere", "radius": 0.03125},
+        load={"time": [0.0, 1 / 3, 2 / 3, 1.0], "normal_force": W,
+              "tangential_force": [0.0, -300.78125, -281.25, -300.78125]},
+        grid={"points": [12, 12], "size": "auto"}, time={"steps": 3},
+        solver={"fft": "scipy"})
+    ds = cp.simulate(scene)
+    assert_contact_laws(ds)
+    d = ds.dissipation.values.copy()
+    assert 0 <= d[3] - d[2] < 2e-13 and d[3] > 4e-4        # this step dissipates nothing
+    d[3] -= 1.9e-13
+    ds["dissipation"] = ds.dissipation.copy(data=d)
+    assert_contact_laws(ds)
+
+
+# --------------------------------------------------------------------------- Masing memory
+MU = 0.3
+E_STAR = an.composite_modulus(210e9, 0.3, 210e9, 0.3)
+HZ = an.hertz_sphere(W, 0.018, E_STAR)
+A, P0 = HZ.contact_radius, HZ.max_pressure
+C_SUM = an.tangential_compliance_sum(210e9, 0.3, 210e9, 0.3)
+MUW = MU * W
+RADII = np.linspace(0.0, 1.1 * A, 221)
+
+
+def _dedupe(values):
+    out = []
+    for v in values:
+        if not out or v != out[-1]:
+            out.append(v)
+    return out
+
+
+#: force histories within partial slip (|T| <= 0.95 mu W), consecutive samples distinct
+histories = st.lists(st.floats(-0.95, 0.95).map(lambda f: f * MUW), min_size=1,
+                     max_size=8).map(_dedupe).filter(lambda h: h[0] != 0.0)
+
+
+def traction(history):
+    return an.mindlin_deresiewicz_traction(RADII, history, MU, W, A, P0)
+
+
+def displacement(history):
+    return an.tangential_displacement(history, MU, W, A, C_SUM)
+
+
+def direction_of(history):
+    """+1 or -1: the direction of the current branch."""
+    prev = history[-2] if len(history) > 1 else 0.0
+    return 1.0 if history[-1] > prev else -1.0
+
+
+@settings(max_examples=25)
+@given(histories)
+def test_masing_traction_is_bounded_and_carries_the_force(history):
+    """|q(r)| <= mu p(r) (1 + 1e-10) + 1e-9 mu p0 on 0 <= r <= 1.1 a, q = 0 outside the
+    contact, |q| = mu p in the slip annulus of the current branch (with the sign of its
+    direction), and the integral of q carries T (rel 1e-9, quadrature split at the
+    circles)."""
+    q = traction(history)
+    p = HZ.pressure(RADII)
+    assert np.all(np.abs(q) <= MU * p * (1 + 1e-10) + 1e-9 * MU * P0)
+    assert np.all(q[RADII >= A] == 0.0)
+    c = an.stick_radius(history, MU, W, A)
+    slip = (RADII > c) & (RADII < A)
+    np.testing.assert_allclose(q[slip], direction_of(history) * MU * p[slip], rtol=1e-10,
+                               atol=1e-9 * MU * P0)
+    force = radial_force(lambda r: an.mindlin_deresiewicz_traction(r, history, MU, W, A, P0),
+                         A, md_circles(history, A, MUW), epsabs=1e-12 * MUW)
+    assert force == pytest.approx(history[-1], rel=1e-9, abs=1e-9 * MUW)
+
+
+@settings(max_examples=100)
+@given(histories)
+def test_masing_is_odd_in_the_force(history):
+    """T -> -T: the remembered reversals, the traction and the displacement change sign
+    (exactly, up to rounding: 1e-12)."""
+    neg = [-t for t in history]
+    rev, t = an.masing_memory(history)
+    assert an.masing_memory(neg) == (tuple(-r for r in rev), -t)
+    np.testing.assert_allclose(traction(neg), -traction(history), rtol=1e-12,
+                               atol=1e-12 * MU * P0)
+    assert displacement(neg) == pytest.approx(-displacement(history), rel=1e-12, abs=1e-30)
+
+
+@settings(max_examples=100)
+@given(histories, st.floats(0.01, 0.99), st.floats(-0.95, 0.95))
+def test_masing_inner_loop_is_wiped_out(history, depth, onward):
+    """Return-point memory: from the end t of any history, an excursion to x (a reversal
+    that stays inside the current branch, so wipes nothing) and back to t leaves no trace:
+    memory, traction and displacement at t are those before the excursion (1e-12), and so
+    are they after going on to any later force y."""
+    rev, t = an.masing_memory(history)
+    limit = rev[-1] if rev else -t          # where the reversal branch would wipe memory
+    x = t + depth * (limit - t)
+    assume(x != t and x != limit)
+    looped = history + [x, t]
+    assert an.masing_memory(looped) == (rev, t)
+    np.testing.assert_allclose(traction(looped), traction(history), rtol=1e-12,
+                               atol=1e-12 * MU * P0)
+    assert displacement(looped) == pytest.approx(displacement(history), rel=1e-12, abs=1e-30)
+    y = onward * MUW
+    assume(y != t)
+    assert an.masing_memory(looped + [y]) == an.masing_memory(history + [y])
+    np.testing.assert_allclose(traction(looped + [y]), traction(history + [y]), rtol=1e-12,
+                               atol=1e-12 * MU * P0)
+
+
+@settings(max_examples=100)
+@given(histories, st.floats(0.0, 1.0), st.booleans())
+def test_masing_new_extreme_restores_the_virgin_curve(history, beyond, positive):
+    """Going to a force y beyond every earlier |T| erases the whole memory: the state is on
+    the virgin curve, the traction is Cattaneo's for y and the displacement Mindlin's
+    virgin one (1e-12)."""
+    peak = max(abs(t) for t in history)
+    y = (1.0 if positive else -1.0) * (peak + beyond * (0.95 * MUW - peak))
+    assume(abs(y) > peak)
+    h = history + [y]
+    assert an.masing_memory(h) == ((), y)
+    np.testing.assert_allclose(traction(h), an.cattaneo_mindlin(y, MU, W, A, P0).traction(RADII),
+                               rtol=1e-12, atol=1e-12 * MU * P0)
+    assert displacement(h) == pytest.approx(displacement([y]), rel=1e-12)
