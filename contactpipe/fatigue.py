@@ -546,6 +546,12 @@ def fatigue(stress_ds: xr.Dataset, criterion: str = "crossland", **constants) ->
         the scalars ``maximum`` and its position ``maximum_x1``, ``maximum_x2``,
         ``maximum_x3`` [m].
 
+    Notes
+    -----
+    A lazy (dask) stress dataset is computed one x3 chunk at a time, all instants and
+    the six components together; the working memory of the criterion itself is bounded
+    by :data:`BLOCK_BYTES` per block of points.
+
     Raises
     ------
     ValueError
@@ -561,16 +567,22 @@ def fatigue(stress_ds: xr.Dataset, criterion: str = "crossland", **constants) ->
                               3 * len(plane_normals(c["plane_step"])[0]))
     block = max(1, int(BLOCK_BYTES // per_point))
     fields = None
-    for k in range(stress_ds.sizes["x3"]):
-        s = np.stack([np.asarray(stress_ds[v].isel(x3=k).values, dtype=float)
-                      for v in COMPONENTS], axis=-1)            # (nt, n1, n2, 6)
-        s = s.reshape(nt, n1 * n2, 6).transpose(1, 0, 2)
-        parts = [fn(s[i:i + block], c) for i in range(0, n1 * n2, block)]
-        res = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
-        if fields is None:
-            fields = {name: np.empty((stress_ds.sizes["x3"], n1, n2)) for name in res}
-        for name, v in res.items():
-            fields[name][k] = v.reshape(n1, n2)
+    nz = stress_ds.sizes["x3"]
+    chunks = stress_ds["s11"].chunks
+    bounds = np.cumsum((0,) + tuple(chunks[1])) if chunks is not None else np.arange(nz + 1)
+    for z0, z1 in zip(bounds[:-1], bounds[1:]):
+        # one read (or one dask computation) of the six components per group of depths
+        group = stress_ds[list(COMPONENTS)].isel(x3=slice(int(z0), int(z1))).compute()
+        for k in range(int(z0), int(z1)):
+            s = np.stack([np.asarray(group[v].isel(x3=k - int(z0)).values, dtype=float)
+                          for v in COMPONENTS], axis=-1)            # (nt, n1, n2, 6)
+            s = s.reshape(nt, n1 * n2, 6).transpose(1, 0, 2)
+            parts = [fn(s[i:i + block], c) for i in range(0, n1 * n2, block)]
+            res = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
+            if fields is None:
+                fields = {name: np.empty((nz, n1, n2)) for name in res}
+            for name, v in res.items():
+                fields[name][k] = v.reshape(n1, n2)
     return _result(stress_ds, criterion, c, fields, main, units)
 
 

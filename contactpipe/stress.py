@@ -117,7 +117,7 @@ def _depths(x3) -> np.ndarray:
         raise ValueError(f"x3 = {x3!r}: give a list of depths [m], at least one")
     bad = z[~np.isfinite(z) | (z < 0)]
     if bad.size:
-        raise ValueError(f"x3 = {bad[0]!r} m: depths must be finite and >= 0 (x3 is the "
+        raise ValueError(f"x3 = {float(bad[0]):g} m: depths must be finite and >= 0 (x3 is the "
                          f"depth into the body)")
     return np.unique(z)
 
