@@ -109,7 +109,7 @@ def _polish(Q, u, limit, rounds=12):
     Returns (ok (m,), u (m, k)): the weights of the accepted sets replaced.
     """
     m, k, d = Q.shape
-    c = np.einsum("mk,mkd->md", u, Q)
+    c = np.matmul(u[:, None, :], Q)[:, 0]
     dist2 = ((Q - c[:, None]) ** 2).sum(-1)
     top = dist2.max(1)
     gamma = (u * dist2).sum(1)
@@ -133,7 +133,7 @@ def _polish(Q, u, limit, rounds=12):
         # certificate, as in min_ball: weights >= 0 give a dual bound gamma <= r*^2
         wc = np.clip(w, 0.0, None)
         wc /= np.where(wc.sum(1) > 0, wc.sum(1), 1.0)[:, None]
-        cw = np.einsum("mk,mkd->md", wc, Q[todo])
+        cw = np.matmul(wc[:, None, :], Q[todo])[:, 0]
         dw = ((Q[todo] - cw[:, None]) ** 2).sum(-1)
         inside = np.isfinite(r2) & ~neg & (dw.max(1) <= (1 + limit) * (wc * dw).sum(1))
         acc = todo[inside]
@@ -157,7 +157,9 @@ def _circumcentre(Q, sup):
     """Centre in the affine hull of the points ``sup`` (m, k), equidistant from them.
 
     Returns the barycentric weights (m, k) (0 off the support), the centre (m, d) and
-    the squared radius (m,) (inf where the support is degenerate or of < 2 points).
+    the squared radius (m,) (inf where the support has < 2 or > d + 1 points). A
+    degenerate support (affinely dependent points) gets the least-norm solution: the
+    caller's certificate decides whether it is the ball.
     """
     m, k, d = Q.shape
     size = sup.sum(1)
@@ -167,26 +169,19 @@ def _circumcentre(Q, sup):
     p0 = pts[:, 0]
     e = pts[:, 1:] - p0[:, None]
     slot = valid[:, 1:]
-    A = 2 * np.einsum("qid,qjd->qij", e, e)
+    A = 2 * np.matmul(e, e.transpose(0, 2, 1))
     A = np.where(slot[:, :, None] & slot[:, None, :], A, 0.0)
     A[:, np.arange(d), np.arange(d)] += np.where(slot, 0.0, 1.0)
     rhs = np.where(slot, (e ** 2).sum(-1), 0.0)       # 2 e_i . x = |e_i|^2, x = c - p0
-    det_ok = np.abs(np.linalg.det(A)) > 1e-300
-    A[~det_ok] = np.eye(d)
-    alpha = np.linalg.solve(A, rhs[..., None])[..., 0]
-    x = np.einsum("qi,qid->qd", alpha, e)
+    alpha = np.matmul(np.linalg.pinv(A), rhs[..., None])[..., 0]   # min-norm if degenerate
+    x = np.matmul(alpha[:, None, :], e)[:, 0]
     centre = p0 + x
-    # barycentric weights: x = sum_i beta_i e_i (least squares on the support)
-    gram = np.where(slot[:, :, None] & slot[:, None, :],
-                    np.einsum("qid,qjd->qij", e, e), 0.0)
-    gram[:, np.arange(d), np.arange(d)] += np.where(slot, 0.0, 1.0)
-    beta = np.linalg.solve(gram, np.where(slot, np.einsum("qid,qd->qi", e, x),
-                                                 0.0)[..., None])[..., 0]
-    wsup = np.concatenate([1 - beta.sum(1, keepdims=True), beta], axis=1)
+    wsup = np.concatenate([1 - alpha.sum(1, keepdims=True), alpha], axis=1)   # barycentric
     wsup = np.where(valid, wsup, 0.0)
     w = np.zeros((m, k))
     w[np.repeat(np.arange(m), d + 1), order.ravel()] = wsup.ravel()
-    r2 = np.where(det_ok & (size >= 2) & (size <= d + 1), (x ** 2).sum(-1), np.inf)
+    r2 = np.where((size >= 2) & (size <= d + 1) & np.all(np.isfinite(wsup), 1),
+                  (x ** 2).sum(-1), np.inf)
     return w, centre, r2
 
 
@@ -219,9 +214,9 @@ def min_ball(points, tolerance=1e-9, max_iter=100000):
     Dual form (Yildirim 2008, algorithm 2): weights u on the simplex, centre c = sum u_i
     p_i, gamma = sum u_i |p_i - c|^2 <= r*^2 <= max_i |p_i - c|^2. Each step moves
     weight towards the furthest point or away from the nearest supporting one, with the
-    exact line search; O(k) work per set and step (the products p_i . c are updated from
-    the Gram matrix, recomputed at each polish against drift; points are shifted to
-    their mean first). After 8 steps, then every 16, the support is read off the
+    exact line search; O(k d) work per set and step (the products p_i . c are updated
+    with one column of the Gram matrix, and recomputed at each polish against drift;
+    points are shifted to their mean first). After 8 steps, then every 16, the support is read off the
     weights and the exact ball through it is found by pivoting (:func:`_polish`),
     accepted only where it satisfies the optimality conditions: most sets finish there.
     """
@@ -229,23 +224,30 @@ def min_ball(points, tolerance=1e-9, max_iter=100000):
     m, k, _ = P.shape
     shift = P.mean(axis=1, keepdims=True)
     Q = P - shift
-    G = np.einsum("mid,mjd->mij", Q, Q)
-    b = np.einsum("mii->mi", G)
+    b = (Q * Q).sum(-1)                                   # |q_i|^2
+
+    def products(rows, weights):                          # q_i . c for c = sum u_j q_j
+        c = np.matmul(weights[:, None, :], Q[rows])[:, 0]
+        return np.matmul(Q[rows], c[:, :, None])[..., 0]
+
+    def column(rows, j):                                  # q_i . q_j
+        return np.matmul(Q[rows], Q[rows, j][:, :, None])[..., 0]
+
     rows = np.arange(m)
     ia = np.argmax(b, axis=1)
-    ib = np.argmax(b - 2 * G[rows, ia] + b[rows, ia][:, None], axis=1)
+    ib = np.argmax(b - 2 * column(rows, ia) + b[rows, ia][:, None], axis=1)
     u = np.zeros((m, k))
     u[rows, ia] += 0.5
     u[rows, ib] += 0.5
     limit = (1.0 + tolerance) ** 2 - 1.0
     tiny = 1e-30 * np.maximum(b.max(1), 1e-300)
     act = rows
-    pc = np.einsum("mij,mj->mi", G, u)
+    pc = products(rows, u)
     for it in range(max_iter):
         if it % 16 == 7:
             ok, unew = _polish(Q[act], u[act], limit)
             u[act] = unew
-            pc[act] = np.einsum("mij,mj->mi", G[act], u[act])
+            pc[act] = products(act, u[act])
             act = act[~ok]
             if act.size == 0:
                 break
@@ -280,9 +282,9 @@ def min_ball(points, tolerance=1e-9, max_iter=100000):
         pa = pa * scale[:, None]
         f, a = r[fwd], r[~fwd]
         ua[f, j[fwd]] += lam_f[fwd]
-        pa[f] += lam_f[fwd][:, None] * G[act[f], :, j[fwd]]
+        pa[f] += lam_f[fwd][:, None] * column(act[f], j[fwd])
         ua[a, kk[~fwd]] -= lam_a[~fwd]
-        pa[a] -= lam_a[~fwd][:, None] * G[act[a], :, kk[~fwd]]
+        pa[a] -= lam_a[~fwd][:, None] * column(act[a], kk[~fwd])
         u[act] = np.clip(ua, 0.0, None)
         pc[act] = pa
     else:
@@ -290,7 +292,7 @@ def min_ball(points, tolerance=1e-9, max_iter=100000):
                            f"reach the relative tolerance {tolerance:g} in {max_iter} "
                            "iterations")
     u /= u.sum(1, keepdims=True)
-    centre = np.einsum("mk,mkd->md", u, Q)
+    centre = np.matmul(u[:, None, :], Q)[:, 0]
     radius = np.sqrt(((Q - centre[:, None]) ** 2).sum(-1).max(1))
     return centre + shift[:, 0], radius
 
@@ -409,7 +411,7 @@ def _dang_van(s, c):
 def _swt_planes(s, n, young, nu):
     """SWT over planes: s (m, nt, 6), n (m or 1, p, 3) -> (m, p) parameter values."""
     w = _plane_weights(n)                                 # (m|1, p, 6)
-    sn = np.einsum("mtc,mpc->mtp", s, np.broadcast_to(w, (s.shape[0],) + w.shape[1:]))
+    sn = np.matmul(s, w[0].T) if w.shape[0] == 1 else np.matmul(s, w.transpose(0, 2, 1))
     tr = s[..., :3].sum(-1)[..., None]                    # (m, nt, 1)
     en = ((1 + nu) * sn - nu * tr) / young
     return np.clip(sn.max(1), 0.0, None) * (en.max(1) - en.min(1)) / 2
@@ -564,7 +566,7 @@ def fatigue(stress_ds: xr.Dataset, criterion: str = "crossland", **constants) ->
     nt = stress_ds.sizes["time"]
     n1, n2 = stress_ds.sizes["x1"], stress_ds.sizes["x2"]
     per_point = nt * 6 * 8 * (8 if criterion != "swt" else
-                              3 * len(plane_normals(c["plane_step"])[0]))
+                              len(plane_normals(c["plane_step"])[0]))
     block = max(1, int(BLOCK_BYTES // per_point))
     fields = None
     nz = stress_ds.sizes["x3"]

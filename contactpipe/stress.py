@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import os
 import pathlib
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -260,9 +261,12 @@ def _lazy(fields, names, depths, op, sign_q, tc, zc):
     for a in arrays:
         args += [a, "tij"]
     args += [zarr, "z"]
-    out = da.blockwise(fn, "ctzij", *args, new_axes={"c": len(COMPONENTS) + 1},
-                       dtype=float, concatenate=True,
-                       meta=np.empty((0, 0, 0, 0, 0), dtype=float))
+    with warnings.catch_warnings():
+        # one block per (instants, depths) pair is the point: more blocks than inputs
+        warnings.filterwarnings("ignore", message="Increasing number of chunks")
+        out = da.blockwise(fn, "ctzij", *args, new_axes={"c": len(COMPONENTS) + 1},
+                           dtype=float, concatenate=True,
+                           meta=np.empty((0, 0, 0, 0, 0), dtype=float))
     return [out[i] for i in range(len(COMPONENTS) + 1)]
 
 
