@@ -52,6 +52,7 @@ import numpy as np
 import xarray as xr
 
 from ._version import __version__
+from .archive import open_archive
 from .exceptions import ArchiveError
 from .files import atomic_path, loads_toml
 from .solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
@@ -336,7 +337,6 @@ def subsurface_stress(ds, x3, body: str = "halfspace", time=None, *, chunks=None
     """
     source = None
     if isinstance(ds, (str, os.PathLike)):
-        from .archive import open_archive
         source = str(ds)
         ds = open_archive(ds)
     idx, depths, nu, (n1, n2, d1, d2) = check_request(ds, x3, body, time, poisson)

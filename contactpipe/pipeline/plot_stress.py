@@ -17,6 +17,7 @@ and returns the Figure, so a notebook shows it and the pipeline saves it
 from __future__ import annotations
 
 import pathlib
+import warnings
 
 import numpy as np
 
@@ -152,7 +153,6 @@ def plot_stress(data, field=None, time=None, fig=None):
 
 def save_figure(fig, path) -> pathlib.Path:
     """Tight layout, then write the figure as PNG atomically."""
-    import warnings
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with warnings.catch_warnings():

@@ -22,9 +22,11 @@ import sys
 
 import numpy as np
 
+from ..archive import open_archive
 from ..exceptions import ArchiveError, ContactpipeError, one_line
 from ..files import check_output_path
-from ..stress import BODIES, check_request, save_stress, subsurface_stress
+from ..stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
+from .plot_stress import plot_stress, save_figure
 
 __all__ = ["add_arguments", "main", "parse_depths", "parse_time"]
 
@@ -76,7 +78,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _bad_input(args):
     """Every check that needs no computation; returns the opened archive."""
-    from ..archive import open_archive
     inputs = [args.archive]
     out = check_output_path(args.output, "stress output", inputs=inputs)
     if args.figure is not None:
@@ -112,8 +113,6 @@ def main(args) -> int:
     summary = _summary(args.output)
     print(f"wrote {args.output} ({summary})")
     if args.figure is not None:
-        from .plot_stress import plot_stress, save_figure
-        from ..stress import open_stress
         with open_stress(args.output) as st:
             save_figure(plot_stress(st), args.figure)
         print(f"wrote {args.figure}")
@@ -121,15 +120,17 @@ def main(args) -> int:
 
 
 def _summary(path) -> str:
-    from ..stress import open_stress
     try:
         with open_stress(path) as st:
             vm = st["von_mises"]
-            k = np.unravel_index(int(np.nanargmax(vm.values)), vm.shape)
+            flat = vm.data.argmax()                  # dask: read block by block
+            flat = int(flat.compute() if hasattr(flat, "compute") else flat)
+            k = np.unravel_index(flat, vm.shape)
             at = {d: float(st[d].values[i]) for d, i in zip(vm.dims, k)}
+            peak = float(vm[tuple(int(i) for i in k)].values)
             return (f"{st.sizes['time']} instant(s) x {st.sizes['x3']} depth(s) on "
                     f"{st.sizes['x1']}x{st.sizes['x2']} cells, {st.attrs.get('body')}; "
-                    f"largest von Mises {float(vm.values[k]):.4g} Pa at x1 = {at['x1']:.4g} "
+                    f"largest von Mises {peak:.4g} Pa at x1 = {at['x1']:.4g} "
                     f"m, x2 = {at['x2']:.4g} m, x3 = {at['x3']:.4g} m, t = {at['time']:.4g} s")
     except (ArchiveError, OSError) as err:          # pragma: no cover - just written
         return f"summary unavailable: {one_line(err)}"
