@@ -21,6 +21,8 @@ from .scene import Scene
 from .planning import Plan, plan
 from .simulation import simulate
 from .archive import open_archive, save
+from .stress import subsurface_stress
+from .fatigue import fatigue
 # the pipeline stages: bound after their modules so the names are the functions
 from .pipeline.compare import compare
 from .pipeline.sweep import open_sweep, sweep
@@ -28,5 +30,5 @@ from .pipeline.sweep import open_sweep, sweep
 __all__ = [
     "__version__", "Scene", "simulate", "save", "open_archive", "plan", "Plan",
     "SceneError", "ConvergenceError", "GrossSlidingError", "GridError", "ArchiveError",
-    "ContactpipeError", "sweep", "open_sweep", "compare",
+    "ContactpipeError", "sweep", "open_sweep", "compare", "subsurface_stress", "fatigue",
 ]

@@ -45,6 +45,7 @@ STAGES = {
     "plot": ("contactpipe.pipeline.plot", "standard figures of an archive or a sweep"),
     "pipeline": ("contactpipe.pipeline.run", "sweep -> compare -> plot, idempotent, cron-safe"),
     "bench": ("contactpipe.pipeline.bench", "print solver speed figures (FFT pairs, iterations, time)"),
+    "stress": ("contactpipe.pipeline.stress_cmd", "subsurface stress field of an archive (DC-FFT per depth)"),
 }
 
 

@@ -1,0 +1,163 @@
+"""Figures of a subsurface stress field or a fatigue criterion (matplotlib, no pyplot).
+
+- :func:`plot_stress_section`: a field on the x1-x3 plane through the centre (x2 nearest
+  0: the mean of the two middle rows of an even grid), depth downwards, its largest value
+  marked.
+- :func:`plot_stress_surface`: the same field on the x1-x2 plane at one depth (the
+  shallowest by default).
+- :func:`plot_stress`: both side by side.
+
+Each takes a dataset from :func:`contactpipe.subsurface_stress` (field over time, x3,
+x1, x2; one instant is drawn, the last by default) or from :func:`contactpipe.fatigue`
+(field over x3, x1, x2; default field: its ``criterion_field``). Axes in mm, stresses in
+MPa (dimensionless indices as they are). Every function takes ``ax=None`` / ``fig=None``
+and returns the Figure, so a notebook shows it and the pipeline saves it
+(:func:`save_figure`, atomic).
+"""
+from __future__ import annotations
+
+import pathlib
+import warnings
+
+import numpy as np
+
+from ..files import atomic_path
+
+__all__ = ["plot_stress_section", "plot_stress_surface", "plot_stress", "save_figure",
+           "FIGSIZE", "DPI"]
+
+FIGSIZE = (11.0, 4.5)        # in
+DPI = 100
+MM = 1e3
+
+
+def _new_axes(ax, fig, ncols=1):
+    from matplotlib.figure import Figure    # heavy: only when a figure is drawn
+    if ax is not None:
+        return ax.figure, [ax]
+    if fig is None:
+        fig = Figure(figsize=FIGSIZE if ncols > 1 else (6.5, 4.5), dpi=DPI)
+    axes = fig.subplots(1, ncols, squeeze=False)[0]
+    return fig, list(axes)
+
+
+def _field(data, field, time):
+    """(DataArray over (x3, x1, x2), label, scale, unit) of the field to draw."""
+    if field is None:
+        field = data.attrs.get("criterion_field", "von_mises")
+    if field not in data.data_vars:
+        raise ValueError(f"field {field!r} is not in the dataset (it has "
+                         f"{', '.join(v for v in data.data_vars if data[v].ndim >= 3)})")
+    da = data[field]
+    title = ""
+    if "time" in da.dims:
+        if time is None:
+            k = da.sizes["time"] - 1
+        else:
+            t = np.asarray(data["time"].values, float)
+            k = int(np.argmin(np.abs(t - float(time))))
+        da = da.isel(time=k)
+        title = f"t = {float(data['time'].values[k]):.4g} s"
+    if tuple(da.dims) != ("x3", "x1", "x2"):
+        raise ValueError(f"field {field!r} has dims {da.dims}: expected (x3, x1, x2) "
+                         "(after the instant is chosen)")
+    unit = da.attrs.get("units", "")
+    scale, shown = (1e-6, "MPa") if unit == "Pa" else (1.0, unit)
+    label = f"{da.attrs.get('long_name', field)} [{shown}]"
+    return da, field, label, scale, title
+
+
+def _centre_rows(x2):
+    ax = np.abs(np.asarray(x2, float))
+    return np.flatnonzero(ax <= ax.min() * (1 + 1e-9) + 1e-15)
+
+
+def plot_stress_section(data, field=None, time=None, ax=None):
+    """A field on the x1-x3 plane through the centre of the grid.
+
+    Parameters
+    ----------
+    data : xarray.Dataset
+        A stress dataset (:func:`contactpipe.subsurface_stress`) or a fatigue result
+        (:func:`contactpipe.fatigue`).
+    field : str, optional
+        Variable to draw; default von Mises, or the fatigue criterion's main field.
+    time : float, optional
+        Instant [s] (the nearest one) of a stress dataset; default the last.
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    da, name, label, scale, title = _field(data, field, time)
+    fig, (ax,) = _new_axes(ax, None)
+    rows = _centre_rows(da["x2"].values)
+    sec = np.asarray(da.isel(x2=rows).values, float).mean(axis=2) * scale    # (x3, x1)
+    x1 = da["x1"].values * MM
+    x3 = da["x3"].values * MM
+    if len(x3) > 1:
+        mesh = ax.pcolormesh(x1, x3, sec, shading="nearest", cmap="viridis")
+        ax.invert_yaxis()
+    else:
+        mesh = None
+        ax.plot(x1, sec[0])
+    k3, k1 = np.unravel_index(int(np.nanargmax(sec)), sec.shape)
+    if mesh is not None:
+        fig.colorbar(mesh, ax=ax, label=label)
+        ax.plot(x1[k1], x3[k3], "w+", ms=12, mew=2)
+        ax.set_ylabel("x3, depth [mm]")
+    else:
+        ax.set_ylabel(label)
+    ax.set_xlabel("x1 [mm]")
+    x2c = float(np.mean(da["x2"].values[rows])) * MM
+    x2c = 0.0 if abs(x2c) < 1e-9 else x2c
+    ax.set_title(f"{name} at x2 = {x2c:.3g} mm" + (f", {title}" if title else "")
+                 + f"\nmax {sec[k3, k1]:.4g} at x1 = {x1[k1]:.3g} mm, x3 = {x3[k3]:.3g} mm",
+                 fontsize=9)
+    return fig
+
+
+def plot_stress_surface(data, field=None, x3=None, time=None, ax=None):
+    """A field on the x1-x2 plane at one depth (default: the shallowest).
+
+    Parameters are those of :func:`plot_stress_section`, and ``x3`` [m] (the nearest
+    depth of the dataset). Returns the Figure.
+    """
+    da, name, label, scale, title = _field(data, field, time)
+    fig, (ax,) = _new_axes(ax, None)
+    z = np.asarray(da["x3"].values, float)
+    k = 0 if x3 is None else int(np.argmin(np.abs(z - float(x3))))
+    m = np.asarray(da.isel(x3=k).values, float) * scale                     # (x1, x2)
+    mesh = ax.pcolormesh(da["x1"].values * MM, da["x2"].values * MM, m.T,
+                         shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=label)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x1 [mm]")
+    ax.set_ylabel("x2 [mm]")
+    ax.set_title(f"{name} at x3 = {z[k] * MM:.3g} mm" + (f", {title}" if title else ""),
+                 fontsize=9)
+    return fig
+
+
+def plot_stress(data, field=None, time=None, fig=None):
+    """The x1-x3 section through the centre and the surface map, side by side.
+
+    Returns the Figure (a new one unless ``fig`` is given).
+    """
+    fig, axes = _new_axes(None, fig, ncols=2)
+    plot_stress_section(data, field, time, ax=axes[0])
+    plot_stress_surface(data, field, None, time, ax=axes[1])
+    return fig
+
+
+def save_figure(fig, path) -> pathlib.Path:
+    """Tight layout, then write the figure as PNG atomically."""
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI)
+    return path
