@@ -15,7 +15,7 @@ from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
 from contactpipe.solver.normal import solve_normal
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
 
-from conftest import A_HERTZ, MU, STEEL, W, make_scene
+from helpers import A_HERTZ, MU, STEEL, W, make_scene
 
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 TOL = 1e-9
