@@ -19,12 +19,15 @@ from __future__ import annotations
 
 import contextlib
 import datetime
+import glob
 import json
 import os
 import pathlib
 import secrets
 import stat
 import sys
+
+import filelock
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -66,7 +69,6 @@ def temp_name(target, keep_suffix: bool = False) -> pathlib.Path:
 
 def temporaries(target) -> list:
     """Temporary files that interrupted atomic writes of ``target`` left behind."""
-    import glob
     target = pathlib.Path(target)
     if not target.parent.is_dir():
         return []
@@ -166,8 +168,6 @@ def exclusive_lock(path, what: str, error=LockedError):
         Raised when another process (or another lock object) holds it, with a message
         naming the lock file and its holder.
     """
-    import filelock
-
     path = pathlib.Path(path)
     lock = filelock.FileLock(str(path), blocking=False)
     try:

@@ -1,5 +1,6 @@
 """The package's layers (pyproject's import-linter contracts) hold: no import cycle, and
 imports flow from the pipeline stages down to the numerical core only."""
+import ast
 import pathlib
 import subprocess
 import sys
@@ -14,3 +15,31 @@ def test_import_layers_are_kept():
     r = subprocess.run([sys.executable, "-c", "from importlinter.cli import lint_imports_command; "
                         "lint_imports_command()"], cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-2000:]
+
+
+MAX_MODULE_LINES = 900
+MAX_FUNCTION_LINES = 120
+
+
+def _sources():
+    return sorted((ROOT / "contactpipe").rglob("*.py"))
+
+
+def test_modules_stay_small():
+    """One purpose per module: none over 900 lines."""
+    long = {str(p.relative_to(ROOT)): p.read_text().count("\n") for p in _sources()}
+    over = {k: n for k, n in long.items() if n > MAX_MODULE_LINES}
+    assert not over, f"modules over {MAX_MODULE_LINES} lines: {over}"
+
+
+def test_functions_stay_short():
+    """No function or method over 120 lines."""
+
+    over = {}
+    for p in _sources():
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > MAX_FUNCTION_LINES:
+                    over[f"{p.relative_to(ROOT)}:{node.name}"] = n
+    assert not over, f"functions over {MAX_FUNCTION_LINES} lines: {over}"

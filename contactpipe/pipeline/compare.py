@@ -37,6 +37,7 @@ import dask
 import numpy as np
 import xarray as xr
 
+from ..archive import open_archive
 from ..exceptions import ArchiveError
 from ..files import atomic_path, check_output_dir, check_output_path
 from .inputs import grid_of, radius_of_area, scene_of
@@ -66,7 +67,6 @@ def load_dataset(archive) -> tuple[xr.Dataset, str]:
     if isinstance(archive, xr.Dataset):
         return archive, str(archive.attrs.get("title", "dataset"))
     if isinstance(archive, (str, os.PathLike)):
-        from ..archive import open_archive
         return open_archive(archive, verify=True), str(archive)
     raise ArchiveError(f"expected an archive path or an xarray.Dataset, got "
                        f"{type(archive).__name__}")
