@@ -134,7 +134,11 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
             if b.has_memory:
                 mems[i] = make_memory(b.creep, dt, pl.time_rule, (3, n1, n2))
 
-    def weights(first):
+    operators = {}
+
+    def operator():
+        """The operator of the next instant: one per distinct tuple of the memories'
+        instantaneous weights (a time rule may weight t0, t1 and later steps apart)."""
         w = []
         for i, b in enumerate((b1, b2)):
             if b.rigid:
@@ -142,13 +146,14 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
             elif mems[i] is None:
                 w.append(float(b.creep.phi0) if b.has_memory else 1.0)
             else:
-                w.append(mems[i].weight0 if first else mems[i].weight)
-        return w
+                w.append(float(mems[i].instant_weight))
+        w = tuple(w)
+        if w not in operators:
+            operators[w] = ContactOperator(spec1, spec2, *w, conv)
+        return operators[w]
 
-    op_first = ContactOperator(spec1, spec2, *weights(True), conv)
     hist_kernels = history_kernels(spec1 if mems[0] is not None else None,
                                    spec2 if mems[1] is not None else None)
-    op_next = ContactOperator(spec1, spec2, *weights(False), conv) if t.size > 1 else op_first
 
     tang = pl.tangential != "none"
     fields = list(FIELDS_NORMAL) + (list(FIELDS_TANGENTIAL) if tang else [])
@@ -204,7 +209,7 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     try:
         for k in range(k_start, t.size):
             first = k == 0
-            op = op_first if first else op_next
+            op = operator()
             pairs0 = conv.pairs
             U = np.zeros((3, n1, n2))
             if any(m is not None for m in mems) and not first:
