@@ -230,15 +230,18 @@ def test_bdf2_state_round_trip():
 
 
 def test_start_follows_the_jump():
-    """After a jump at t0 a stiff law starts with exponential Euler (blind to sigma_0), a
-    monotone one with the trapezoid; a traction growing from zero starts with the
-    trapezoid (exact for a linear growth)."""
-    for name, jump, start in (("kelvin_voigt", 1.0, "exponential_euler"),
-                              ("zener100", 1.0, "exponential_euler"),
-                              ("zener2", 1.0, "linear"), ("kelvin_voigt", 0.0, "linear")):
+    """After a jump at t0 "bdf2" starts with two exponential-Euler steps (blind to sigma_0,
+    exact for a constant traction); a traction growing from zero starts with one
+    trapezoid step (exact for a linear growth); plain BDF2 with two BDF1 steps."""
+    for name, jump, start, steps in (("kelvin_voigt", 1.0, "exponential_euler", 2),
+                                     ("zener2", 1.0, "exponential_euler", 2),
+                                     ("kelvin_voigt", 0.0, "linear", 1)):
         m = RecursiveMemory(CREEPS[name], 0.1, "bdf2", (2,))
         m.commit(np.full(2, jump))
-        assert m.start == start, name
+        assert (m.start, m.start_steps) == (start, steps), name
+    m = RecursiveMemory(CREEPS["zener2"], 0.1, "bdf2", (2,), fitted=False)
+    m.commit(np.zeros(2))
+    assert (m.start, m.start_steps) == ("bdf1", 2)
 
 
 # --------------------------------------------------------------------------- order
@@ -300,17 +303,17 @@ def rounded_punch_scene(law, n, steps, gap_file, rule="bdf2"):
 
 @pytest.mark.parametrize("law", list(LAWS))
 def test_order_pressure_field(law, tmp_path):
-    """The pressure FIELD of the rounded punch, 24^2, 20 / 40 / 80 steps over 2 tau: "bdf2"
-    converges with order >= 1.8 over t >= 0.25 tau (measured 1.97 Maxwell, 1.89 Zener 2,
-    1.93 Prony; 5.9 Zener 100, whose fast relaxation is over after the first step).
-    Kelvin-Voigt, once the face is in full contact (t >= 0.5 tau), is integrated exactly
-    for a linear load: the three runs agree to 1e-9 of the peak pressure (measured 4e-12)."""
-    n = 24
+    """The pressure FIELD of the rounded punch, 16^2, 40 / 80 / 160 steps over 2 tau:
+    "bdf2" converges with order >= 1.8 over t >= 0.25 tau (measured 2.00 Maxwell, 2.03
+    Zener 2, 2.17 Prony; 5.2 Zener 100, whose fast relaxation is over within the first
+    steps). Kelvin-Voigt, once the face is in full contact (t >= 0.5 tau), is integrated
+    exactly for a linear load: the runs agree to 1e-9 of the peak pressure (measured 1e-11)."""
+    n = 16
     x = -0.4e-3 + (np.arange(n) + 0.5) * 0.8e-3 / n
     r = np.hypot(*np.meshgrid(x, x, indexing="ij"))
     gap_file = tmp_path / "punch.npy"
     np.save(gap_file, np.where(r <= 0.3e-3, r ** 2 / (2 * R), 0.01))
-    runs = [cp.simulate(rounded_punch_scene(law, n, s, gap_file)) for s in (20, 40, 80)]
+    runs = [cp.simulate(rounded_punch_scene(law, n, s, gap_file)) for s in (40, 80, 160)]
     p = [ds.p.values[::2 ** i] for i, ds in enumerate(runs)]
     assert all(np.all((ds.p.values[-1] > 0) == (r <= 0.3e-3)) for ds in runs)
     t = runs[0].time.values
@@ -403,13 +406,13 @@ def test_stiff_zener_issue_case():
     assert m["field"] < 0.03, m
 
 
-@pytest.mark.parametrize("law,bound", [("maxwell", 0.012), ("zener2", 0.006),
-                                       ("prony3", 0.03)])
+@pytest.mark.parametrize("law,bound", [("maxwell", 0.01), ("zener2", 0.008),
+                                       ("prony3", 0.025)])
 def test_lee_radok_fields(law, bound):
     """Maxwell, Zener E0/Einf = 2 and a 3-term Prony series with a dashpot, 48^2 auto-sized,
-    20 steps over 2 s: radius within 1 cell, no hole, no zigzag, and the field inside 0.8 a
-    within the stated fraction of the centre pressure for t >= 0.25 tau (measured 0.77 %,
-    0.17 %, 2.1 %)."""
+    20 steps over 2 s: radius within 1 cell (measured 0.22, 0.24, 0.23), no hole, no zigzag,
+    and the field inside 0.8 a within the stated fraction of the centre pressure for
+    t >= 0.25 tau (measured 0.73 %, 0.50 %, 1.7 %)."""
     m = field_measures(cp.simulate(lee_radok_scene(law, 48, 20)), law, t_field=0.25)
     assert m["radius_cells"] < 1.0 and m["holes"] == 0 and m["zigzag"] < 1e-3, m
     assert m["field"] < bound, m

@@ -28,10 +28,10 @@ the jump of the load: H(t0) = φ0 σ_0.
     to the next step: the traction error's amplification factor is 0 for Kelvin–Voigt
     (φ0 = 0) and small for stiff terms (E0/E∞ ≫ 1 with Δt ≳ τ/(E0/E∞)), where "linear"
     gives −1 (:func:`error_amplification`). A two-step formula needs a start, chosen
-    when the jump at t0 is known: one "linear" step when there is no jump (σ_0 = 0) or
-    when "linear" is monotone for this φ and Δt (:func:`is_monotone`), otherwise two
-    exponential-Euler steps (σ held constant over the step: exact after a step load,
-    L-stable, and blind to σ_0). Instantaneous weights: φ0 at t0, then that of the start,
+    when the state at t0 is known: after a jump (σ_0 ≠ 0), two exponential-Euler steps
+    (σ held constant over the step: exact after a step load, L-stable, and blind to σ_0);
+    without one (σ_0 = 0), one "linear" step (exact for a traction growing linearly from
+    zero). Instantaneous weights: φ0 at t0, then that of the start,
     then φ0 + 2bΔt/3 + Σ c_i B0(Δt/τ_i) (:func:`fitted_bdf2_coefficients`).
     With ``fitted=False``: plain BDF2 started by two BDF1 steps, identical to Lubich's
     BDF2 convolution quadrature, which :class:`DirectMemory` applies to a tabulated φ.
@@ -72,7 +72,8 @@ def is_monotone(creep: ExponentialCreep, dt: float, rule: str) -> bool:
     complex with a negative real part): the error then never changes sign from one step
     to the next (:func:`error_amplification`)."""
     g = error_amplification(creep, dt, rule)
-    return bool(np.all((g.real >= -1e-12) | (np.abs(g) < 1e-12)))
+    # |g| < 1e-6: a zero factor of a Jordan block, split by round-off into ±1e-8
+    return bool(np.all((g.real >= -1e-12) | (np.abs(g) < 1e-6)))
 
 
 def _check_rule(rule):
@@ -162,21 +163,17 @@ class RecursiveMemory:
 
     # -- the scheme ---------------------------------------------------------------------
     def _choose_start(self, sigma0):
-        """Rule "bdf2", fitted: the one-step start, chosen when the jump at t0 is known.
+        """Rule "bdf2", fitted: the one-step start, chosen when the state at t0 is known.
 
-        One exponential-trapezoid ("linear") step when there is no jump (σ_0 = 0: the
-        traction grows from zero, and the trapezoid is exact for a linear growth) or when
-        the trapezoid is monotone for this φ and Δt (no negative amplification factor,
-        :func:`is_monotone`: no stiff relaxation within the step to misrepresent);
-        otherwise two exponential-Euler steps (σ constant over the step: exact for a
-        constant traction after the jump, L-stable, and blind to σ_0 — the concentrated
-        load of a body without instantaneous elasticity)."""
+        After a jump (σ_0 ≠ 0: a step load) two exponential-Euler steps: σ held constant
+        over the step, exact for a constant traction, L-stable, and blind to σ_0 — the
+        concentrated load of a body without instantaneous elasticity, or a glassy response
+        that relaxes within the step. Without a jump (the traction grows from zero) one
+        exponential-trapezoid ("linear") step, exact for a linear growth (measured in
+        docs/time-integration.md: a ramp's a³ error drops from 45 % to 1.2 % at 10 steps)."""
         if self.rule != "bdf2" or not self.fitted:
             return
-        if not np.any(sigma0) or is_monotone(self.creep, self.dt, "linear"):
-            self.start = "linear"
-        else:
-            self.start = "exponential_euler"
+        self.start = "exponential_euler" if np.any(sigma0) else "linear"
 
     @property
     def start_steps(self) -> int:
