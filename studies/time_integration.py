@@ -5,8 +5,10 @@ Laws (normalised creep functions; tau = 1 s): Maxwell (t' = tau), Zener E0/Einf 
 100, Kelvin-Voigt (no instantaneous elasticity), a 3-term Prony series with a dashpot
 (c = 0.5, 1, 2 at 0.1, 1, 5 s; t' = 10 s). Rules and candidates:
 
-``bdf2``         the package's rule: exponentially fitted BDF2 on the internal variables,
-                 one trapezoid or two exponential-Euler start steps (chosen at t0)
+``auto``         the package's recommended rule: "linear" where its error keeps its sign
+                 for the creep function and step, else "bdf2"
+``bdf2``         exponentially fitted BDF2 on the internal variables, two
+                 exponential-Euler start steps after a jump at t0, one trapezoid otherwise
 ``bdf2_plain``   plain BDF2 started by two BDF1 steps (= BDF2 convolution quadrature)
 ``bdf2_1start``  the fitted rule with a single exponential-Euler start step
 ``linear``       traction linear within a step, exponentials integrated exactly
@@ -74,12 +76,12 @@ LAWS = {
                prony(PRONY3, 10.0)),
 }
 RULES = ("bdf2", "linear", "step_start")
-CANDIDATES = ("bdf2", "bdf2_plain", "bdf2_1start", "linear", "linear_ds", "step_start")
+CANDIDATES = ("auto", "bdf2", "bdf2_plain", "bdf2_1start", "linear", "linear_ds", "step_start")
 
 
 def accept_time_rule(name="bdf2"):
-    """Let the scene accept ``solver.time_rule = name`` (issue 9, phase 2 adds "bdf2" to
-    the scene's list; until then the studies widen it for their runs)."""
+    """Let the scene accept ``solver.time_rule = name`` (issue 9, phase 2 adds "auto" and
+    "bdf2" to the scene's list; until then the studies widen it for their runs)."""
     if name not in scene_module.TIME_RULES:
         scene_module.TIME_RULES = tuple(scene_module.TIME_RULES) + (name,)
 
@@ -463,7 +465,8 @@ def main(argv=None):
     p = c.parser(__doc__.splitlines()[0], __doc__)
     args = p.parse_args(argv)
     out = c.out_dir(args)
-    accept_time_rule("bdf2")
+    for rule in ("auto", "bdf2"):
+        accept_time_rule(rule)
     rows = amplification_rows()
     rows += scalar_rows(steps=(10, 20, 40), reference=640) if args.quick else scalar_rows()
     print("\n3. Lee-Radok step load (cp.simulate)")
