@@ -81,7 +81,7 @@ from matplotlib.ticker import NullFormatter
 import contactpipe as cp
 from contactpipe.materials import maxwell as maxwell_creep, zener as zener_creep
 from contactpipe.solver.memory import resolve_rule
-from time_integration import accept_time_rule
+from time_integration import scene_accepts
 
 GRIDS = (16, 24, 32, 48, 64, 96, 128, 192, 256)
 GRIDS_FULL = GRIDS + (384, 512)
@@ -555,7 +555,8 @@ def plot(rows, out):
         ax.axis("off")
     handles = [plt.Line2D([], [], ls="", marker="o", color=color[g], label=f"{g}²")
                for g in grids]
-    handles += [plt.Line2D([], [], ls="", marker="D", color="k", label="bdf2 rule"),
+    handles += [plt.Line2D([], [], ls="", marker="*", color="k", label="auto rule"),
+                plt.Line2D([], [], ls="", marker="D", color="k", label="bdf2 rule"),
                 plt.Line2D([], [], ls="", marker="o", color="k", label="linear rule / elastic"),
                 plt.Line2D([], [], ls="", marker="s", mfc="none", color="k",
                            label="step-start rule"),
@@ -577,13 +578,12 @@ def main(argv=None):
     p.add_argument("--steps", type=int, nargs="+", help="step counts (multiples of 5)")
     p.add_argument("--cases", nargs="+", choices=CASES, help="cases to run")
     args = p.parse_args(argv)
-    for rule in RULES:
-        accept_time_rule(rule)
     out = c.out_dir(args)
     todo = plan_runs(args)
     print(f"{len(todo)} runs (OPENBLAS_NUM_THREADS = {c.blas_threads()})")
     t0 = time.perf_counter()
-    rows = execute(todo)
+    with scene_accepts(*RULES):
+        rows = execute(todo)
     print(f"total {time.perf_counter() - t0:.1f} s")
     csv_path, nc = write_table(rows, out)
     png = plot(rows, out)

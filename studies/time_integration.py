@@ -79,11 +79,17 @@ RULES = ("bdf2", "linear", "step_start")
 CANDIDATES = ("auto", "bdf2", "bdf2_plain", "bdf2_1start", "linear", "linear_ds", "step_start")
 
 
-def accept_time_rule(name="bdf2"):
-    """Let the scene accept ``solver.time_rule = name`` (issue 9, phase 2 adds "auto" and
-    "bdf2" to the scene's list; until then the studies widen it for their runs)."""
-    if name not in scene_module.TIME_RULES:
-        scene_module.TIME_RULES = tuple(scene_module.TIME_RULES) + (name,)
+@contextlib.contextmanager
+def scene_accepts(*names):
+    """Within the block the scene accepts ``solver.time_rule`` = each of ``names`` (issue 9,
+    phase 2 adds "auto" and "bdf2" to the scene's list; until then the studies widen it
+    for their runs, and restore it after)."""
+    old = scene_module.TIME_RULES
+    scene_module.TIME_RULES = tuple(old) + tuple(n for n in names if n not in old)
+    try:
+        yield
+    finally:
+        scene_module.TIME_RULES = old
 
 
 # --------------------------------------------------------------------------- candidates
@@ -465,14 +471,12 @@ def main(argv=None):
     p = c.parser(__doc__.splitlines()[0], __doc__)
     args = p.parse_args(argv)
     out = c.out_dir(args)
-    for rule in ("auto", "bdf2"):
-        accept_time_rule(rule)
     rows = amplification_rows()
     rows += scalar_rows(steps=(10, 20, 40), reference=640) if args.quick else scalar_rows()
     print("\n3. Lee-Radok step load (cp.simulate)")
     keep = {}
-    rows += lee_radok_rows(args.quick, keep)
-    with tempfile.TemporaryDirectory() as folder:
+    with scene_accepts("auto", "bdf2"), tempfile.TemporaryDirectory() as folder:
+        rows += lee_radok_rows(args.quick, keep)
         rows += punch_rows(args.quick, folder)
     print_tables(rows)
     csv_path = write_csv(rows, out)
