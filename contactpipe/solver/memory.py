@@ -86,9 +86,10 @@ def is_monotone(creep: ExponentialCreep, dt: float, rule: str) -> bool:
 
 def resolve_rule(creep, dt: float, rule: str) -> str:
     """The rule a memory applies: ``rule`` itself, or for "auto" "linear" where it is
-    monotone for this creep function and step (:func:`is_monotone`: the more accurate
-    rule, measured 4-25 times smaller errors there, docs/time-integration.md) and "bdf2"
-    elsewhere (Kelvin-Voigt, stiff terms, Δt beyond about 2 t'), and for a tabulated φ.
+    monotone for this creep function and step (:func:`is_monotone`; there the more accurate
+    rule: Lee-Radok fields 1.3-3 times and the Maxwell fretting loop about 20 times closer,
+    docs/time-integration.md) and "bdf2" elsewhere (Kelvin-Voigt, stiff terms, a dashpot
+    with Δt > 2 t') and for a tabulated φ.
 
     Parameters
     ----------
@@ -154,8 +155,8 @@ class RecursiveMemory:
         Normalised creep function.
     dt : float
         Time step [s] (uniform mesh).
-    rule : {"bdf2", "linear", "step_start"}
-        Time rule (module doc).
+    rule : {"auto", "bdf2", "linear", "step_start"}
+        Time rule (module doc); "auto" is resolved here (:attr:`rule` holds the result).
     shape : tuple
         Shape of the traction array held (e.g. (3, N1, N2) for q1, q2, p).
     fitted : bool
