@@ -472,3 +472,22 @@ def test_lee_radok_fields_full_size(law):
     m = field_measures(cp.simulate(lee_radok_scene(law, 128, 80, size)), law, t_field=0.5)
     assert m["radius_cells"] < 1.0 and m["holes"] == 0 and m["zigzag"] < 1e-3, m
     assert m["field"] < 0.02, m
+
+
+def test_study_quick(tmp_path):
+    """studies/time_integration.py --quick runs end to end (seconds) and its rows say what the
+    tests above say: "bdf2" has no hole on the Kelvin-Voigt case, "linear" has."""
+    import sys
+    from pathlib import Path
+    studies = Path(__file__).resolve().parents[1] / "studies"
+    sys.path.insert(0, str(studies))
+    try:
+        import time_integration
+        out = time_integration.main(["--quick", "--out", str(tmp_path)])
+    finally:
+        sys.path.remove(str(studies))
+    assert Path(out["png"]).stat().st_size > 5000 and Path(out["csv"]).is_file()
+    holes = {r["rule"]: r["holes"] for r in out["rows"]
+             if r["part"] == "lee_radok" and r["law"] == "kelvin_voigt"}
+    assert holes["bdf2"] == 0 and holes["auto"] == 0 and holes["linear"] > 0
+
