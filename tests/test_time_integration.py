@@ -457,17 +457,25 @@ def test_tabulated_kelvin_voigt_like_creep_has_no_holes():
 @pytest.mark.slow
 def test_kelvin_voigt_converges_with_many_steps():
     """Issue 9: "with 2000 steps it is worse, not better". Kelvin-Voigt at 48^2 over 1.6 mm
-    with 2000 steps: "bdf2" keeps the radius within 1 cell and no holes."""
-    m = field_measures(cp.simulate(lee_radok_scene("kelvin_voigt", 48, 2000, [1.6e-3] * 2)),
-                       "kelvin_voigt")
+    with 2000 steps: "auto" ("bdf2") keeps the radius within 1 cell (measured 0.28; "linear"
+    1.28) and no hole (linear: 64). The centre pressure then resolves each ring of cells
+    entering the contact (the semi-discrete Kelvin-Voigt pressure jumps there): before
+    0.01 tau, with 4 to 32 cells in contact, that reads as a zigzag of 0.85 p_c; from
+    0.25 tau on, 1.1e-3 p_c at most (bound 2e-3)."""
+    ds = cp.simulate(lee_radok_scene("kelvin_voigt", 48, 2000, [1.6e-3] * 2))
+    m = field_measures(ds, "kelvin_voigt")
     assert m["radius_cells"] < 1.0 and m["holes"] == 0, m
+    t = ds.time.values
+    pc = ds.p.values[:, 23:25, 23:25].mean(axis=(1, 2))
+    assert zigzag(pc[t >= 0.25]) / pc[-1] < 2e-3
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("law", list(LAWS))
 def test_lee_radok_fields_full_size(law):
-    """Every law at 128^2 (auto, 1.6 mm for Kelvin-Voigt) with 80 steps: radius within 1 cell,
-    no hole, no zigzag, field within 2 % of the centre pressure for t >= 0.5 tau."""
+    """Every law at 128^2 (auto, 1.6 mm for Kelvin-Voigt) with 80 steps, "auto": radius within
+    1 cell (measured 0.18-0.22), no hole, no zigzag (1e-4 at most), field within 2 % of the
+    centre pressure for t >= 0.5 tau (measured 0.02 % Zener 2 to 0.67 % Kelvin-Voigt)."""
     size = [1.6e-3] * 2 if law == "kelvin_voigt" else "auto"
     m = field_measures(cp.simulate(lee_radok_scene(law, 128, 80, size)), law, t_field=0.5)
     assert m["radius_cells"] < 1.0 and m["holes"] == 0 and m["zigzag"] < 1e-3, m
