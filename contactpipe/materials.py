@@ -12,7 +12,10 @@ Every normalised creep function here has the form
 
 which is what makes the O(N)-per-step recursion of :mod:`contactpipe.solver.memory` possible.
 A tabulated creep function (:class:`TabulatedCreep`) is also offered; it needs the
-direct (O(k N) per step) Boltzmann sum.
+direct (O(k N) per step) Boltzmann sum. Measured data (a creep or relaxation table, or
+storage and loss moduli over frequency) give a Prony series of that form through
+:func:`fit_creep_compliance`, :func:`fit_relaxation_modulus` and :func:`fit_dynamic_moduli`.
+:func:`step_start_stable_step` is the largest stable step of the paper's step-start rule.
 
 Units: moduli [Pa], times [s]; phi is dimensionless.
 """
@@ -24,7 +27,8 @@ import numpy as np
 
 __all__ = [
     "ExponentialCreep", "TabulatedCreep", "ELASTIC", "maxwell", "kelvin_voigt", "zener",
-    "prony", "Body", "dundurs_beta", "composite_modulus",
+    "prony", "Body", "dundurs_beta", "composite_modulus", "step_start_stable_step",
+    "PronyFit", "fit_creep_compliance", "fit_relaxation_modulus", "fit_dynamic_moduli",
 ]
 
 
@@ -81,6 +85,23 @@ class ExponentialCreep:
         ts = np.linspace(0.0, t_end, 257)
         return float(np.max(self(ts)))
 
+    def derivative(self, t):
+        """phi'(t) [1/s] (the creep rate; phi'(0) at t = 0)."""
+        t = np.asarray(t, dtype=float)
+        out = np.full(t.shape, self.b)
+        for di, ti in zip(self.d, self.tau):
+            out = out - di / ti * np.exp(-t / ti)
+        return out
+
+    def stieltjes(self, s):
+        """K(s) = int_{0-}^inf exp(-s t) dphi(t) = s * Laplace[phi](s) [1], Re s > 0:
+        phi0 + b/s + sum_i c_i / (1 + s tau_i) with c_i = -d_i."""
+        s = np.asarray(s, dtype=complex)
+        out = self.phi0 + self.b / s
+        for di, ti in zip(self.d, self.tau):
+            out = out - di / (1.0 + s * ti)
+        return out
+
 
 @dataclass(frozen=True)
 class TabulatedCreep:
@@ -133,6 +154,24 @@ class TabulatedCreep:
         ts = np.concatenate([np.linspace(0.0, t_end, 257), [t for t in self.t if t <= t_end]])
         return float(np.max(self(ts)))
 
+    def derivative(self, t):
+        """phi'(t) [1/s]: the slope of the table's segment right of t (0 past the end)."""
+        t = np.asarray(t, dtype=float)
+        tk, pk = np.asarray(self.t, dtype=float), np.asarray(self.phi, dtype=float)
+        slope = np.append(np.diff(pk) / np.diff(tk), 0.0)
+        i = np.clip(np.searchsorted(tk, t, side="right") - 1, 0, tk.size - 1)
+        return slope[i]
+
+    def stieltjes(self, s):
+        """K(s) = int_{0-}^inf exp(-s t) dphi(t) [1], Re s > 0 (exact for the linear
+        interpolation, phi constant past the last time)."""
+        s = np.asarray(s, dtype=complex)
+        tk, pk = np.asarray(self.t, dtype=float), np.asarray(self.phi, dtype=float)
+        out = np.full(s.shape, pk[0], dtype=complex)
+        for t0, t1, slope in zip(tk[:-1], tk[1:], np.diff(pk) / np.diff(tk)):
+            out = out + slope * (np.expm1(-s * t0) - np.expm1(-s * t1)) / s
+        return out
+
 
 ELASTIC = ExponentialCreep()
 
@@ -161,6 +200,396 @@ def prony(terms, relaxation_time: float | None = None) -> ExponentialCreep:
     b = 0.0 if relaxation_time is None else 1.0 / relaxation_time
     return ExponentialCreep(a=1.0 + sum(c), b=b, d=tuple(-ci for ci in c), tau=tau,
                             name="prony")
+
+
+def step_start_stable_step(creep) -> float:
+    """The largest time step [s] for which the step-start rule is stable.
+
+    The step-start rule (paper eq. 7 with each increment at the start of its step) is an
+    explicit scheme. For phi = phi0 + b t + sum_i c_i (1 - exp(-t/tau_i)) with b, c_i >= 0
+    (a non-decreasing phi with a completely monotone rate: every model here) its traction
+    error under a fixed displacement obeys a linear recursion whose amplification factors
+    g are the roots of ``phi0 + b dt/(g - 1) + sum_i c_i (1 - l_i)/(g - l_i) = 0``,
+    l_i = exp(-dt/tau_i): all real, all in (-1, 1) except one that leaves through -1 when
+
+        phi0 = b dt / 2 + sum_i c_i tanh(dt / (2 tau_i)).
+
+    That root of dt is returned: inf when there is no memory or the right-hand side never
+    reaches phi0 (b = 0 and sum c_i < phi0, e.g. Zener with E0/Einf <= 2), 0 for phi0 = 0
+    (Kelvin-Voigt: never stable). At the bound the error alternates without decay, so a
+    stable step is strictly below it. Maxwell: 2 t'; Zener: tau ln(r / (r - 2)),
+    r = E0/Einf > 2. The small-step form 2 phi0 / phi'(0) (tanh x <= x) is a lower bound,
+    exact for Maxwell and within 1/r of the exact one for Zener (2 tau / (r - 1)). A
+    tabulated phi gets that estimate, from the slope of its first segment.
+
+    Parameters
+    ----------
+    creep : ExponentialCreep or TabulatedCreep
+        Normalised creep function phi [1].
+
+    Returns
+    -------
+    float
+        The largest stable step [s] (inf: any step).
+
+    Raises
+    ------
+    ValueError
+        A creep function with a decreasing term (b < 0 or some c_i < 0): the bound
+        above does not hold for it.
+    """
+    from scipy.optimize import brentq      # scipy.optimize is heavy; only needed here
+
+    phi0 = float(creep.phi0)
+    if isinstance(creep, TabulatedCreep):
+        rate = float(creep.derivative(0.0))
+        if phi0 <= 0.0:
+            return 0.0
+        return np.inf if rate <= 0.0 else 2.0 * phi0 / rate
+    c = -np.asarray(creep.d, dtype=float)
+    tau = np.asarray(creep.tau, dtype=float)
+    b = float(creep.b)
+    if b < 0 or np.any(c < 0):
+        raise ValueError(f"step-start stability bound: the creep function has a decreasing "
+                         f"term (b = {b:g} 1/s, c = {c.tolist()}); it needs b >= 0 and "
+                         f"c_i >= 0")
+    if phi0 <= 0.0:
+        return 0.0
+    if b == 0.0 and c.sum() <= phi0:
+        return np.inf
+
+    def excess(dt):
+        return 0.5 * b * dt + float(np.sum(c * np.tanh(dt / (2.0 * tau)))) - phi0
+
+    rate = b + float(np.sum(c / tau))
+    lo, hi = 2.0 * phi0 / rate, 2.0 * phi0 / rate
+    while excess(hi) < 0.0:
+        hi *= 2.0
+    return float(brentq(excess, lo, hi, xtol=1e-15 * hi, rtol=1e-15))
+
+
+# --------------------------------------------------------------------------- fitting
+@dataclass(frozen=True)
+class PronyFit:
+    """A creep function fitted to measured data (:func:`fit_creep_compliance`,
+    :func:`fit_relaxation_modulus`, :func:`fit_dynamic_moduli`).
+
+    Attributes
+    ----------
+    creep : ExponentialCreep
+        The normalised creep function phi [1], ``name = "fit"``.
+    young : float
+        The Young modulus that normalises phi [Pa]: the instantaneous one, 1/D(0); the
+        long-term one when the data show no instantaneous compliance (phi(0) = 0).
+    rms_error, max_error : float
+        Root-mean-square and largest relative misfit over the data points [1] (a zero
+        compliance at t = 0 left out).
+    times : tuple of float
+        The fixed, log-spaced times of the fit [s] (retardation times for a creep table,
+        relaxation times for a relaxation or dynamic one).
+    source : str
+        "creep", "relaxation" or "dynamic".
+    """
+
+    creep: ExponentialCreep
+    young: float
+    rms_error: float
+    max_error: float
+    times: tuple
+    source: str
+
+
+def _fit_columns(what, x, columns, *, positive_x=True, zero_at_origin=False):
+    """Checked, float 1-D arrays of equal length: x strictly ascending, columns > 0 (a
+    creep compliance may be 0 at t = 0: no instantaneous compliance)."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 1 or x.size < 3:
+        raise ValueError(f"{what}: need at least 3 points in a 1-D table, got shape {x.shape}")
+    if not np.all(np.isfinite(x)) or np.any(np.diff(x) <= 0):
+        raise ValueError(f"{what}: the abscissae must be finite and strictly ascending")
+    if np.any(x < 0) or (positive_x and x[0] <= 0):
+        raise ValueError(f"{what}: the abscissae must be >= 0 (frequencies > 0), got "
+                         f"{x[0]:g}")
+    out = []
+    for name, col in columns:
+        col = np.asarray(col, dtype=float)
+        if col.shape != x.shape:
+            raise ValueError(f"{what}: {name} has {col.size} values for {x.size} abscissae")
+        low = col[1:] if (zero_at_origin and x[0] == 0 and col[0] == 0) else col
+        if not np.all(np.isfinite(col)) or np.any(low <= 0):
+            raise ValueError(f"{what}: {name} must be finite and > 0 (a positive material "
+                             f"function{', 0 allowed at t = 0' if zero_at_origin else ''}), "
+                             f"got min {np.min(col):g}")
+        out.append(col)
+    return x, out
+
+
+def _check_monotone(what, x, y, sign, noise, unit):
+    """Refuse data that move the wrong way by more than ``noise`` (relative): below their
+    running maximum (sign +1, must not decrease) or above their running minimum (-1)."""
+    if sign > 0:
+        excess = np.maximum.accumulate(y) - y
+    else:
+        excess = y - np.minimum.accumulate(y)
+    rel = excess / y
+    worst = int(np.argmax(rel))
+    if rel[worst] > noise:
+        way = "decrease" if sign > 0 else "increase"
+        raise ValueError(f"{what} must not {way}: it does so by {rel[worst]:.1%} at "
+                         f"{x[worst]:g} {unit} (more than the noise allowance {noise:.1%}); "
+                         f"the Prony fit would not be monotone")
+
+
+def _log_times(lo, hi, per_decade, times=None):
+    """The fixed times of a fit [s]: ``times`` as given, or log-spaced over [lo, hi]."""
+    if times is not None:
+        times = np.sort(np.asarray(times, dtype=float).ravel())
+        if times.size == 0 or not np.all(np.isfinite(times)) or np.any(times <= 0) \
+                or np.any(np.diff(times) <= 0):
+            raise ValueError(f"times must be distinct, finite and > 0 [s], got "
+                             f"{times.tolist()}")
+        return times
+    if int(per_decade) != per_decade or per_decade < 1:
+        raise ValueError(f"terms_per_decade must be an integer >= 1, got {per_decade}")
+    n = max(int(np.ceil(per_decade * np.log10(hi / lo) - 1e-9)), 1) + 1
+    return np.logspace(np.log10(lo), np.log10(hi), n)
+
+
+def _nonnegative_fit(matrix, data):
+    """min |(A c - y)/y| over c >= 0 (scipy.optimize.least_squares with bounds); a zero
+    datum (a compliance at t = 0) weighs as the smallest positive one."""
+    from scipy.optimize import least_squares   # heavy; only the fits need it
+
+    weight = 1.0 / np.where(data > 0, data, np.min(data[data > 0]))
+    a = matrix * weight[:, None]
+    target = data * weight
+    scale = np.maximum(np.abs(a).max(axis=0), 1e-300)
+    a = a / scale                               # unit columns: coefficients of order 1
+    res = least_squares(lambda c: a @ c - target, np.full(a.shape[1], 1e-3),
+                        jac=lambda c: a, bounds=(0.0, np.inf), method="trf",
+                        ftol=1e-15, xtol=1e-15, gtol=1e-15, max_nfev=10000)
+    coef = res.x / scale
+    coef[res.active_mask != 0] = 0.0           # on the bound: exactly zero
+    return coef
+
+
+def _fit_result(creep, young, model, data, times, source):
+    pos = data > 0
+    err = model[pos] / data[pos] - 1.0
+    fit = PronyFit(creep=creep, young=float(young),
+                   rms_error=float(np.sqrt(np.mean(err ** 2))),
+                   max_error=float(np.abs(err).max()), times=tuple(float(t) for t in times),
+                   source=source)
+    t = np.concatenate([[0.0], np.logspace(np.log10(times[0]) - 3, np.log10(times[-1]) + 3,
+                                           400)])
+    phi = creep(t)
+    if not (np.all(phi[1:] > 0) and np.all(np.diff(phi) >= -1e-12 * phi.max())):
+        raise ValueError(f"the {source} fit is not a positive, non-decreasing creep "
+                         f"function (min phi {phi[1:].min():g}); check the data")
+    return fit
+
+
+def _creep_from_compliance(j0, jk, lam, flow):
+    """Normalised phi and its modulus from D(t) = j0 + sum jk (1 - e^{-t/lam}) + flow t."""
+    total = j0 + jk.sum()
+    keep = jk > 1e-9 * total                    # solver tolerance, not data (as above)
+    jk, lam = jk[keep], lam[keep]
+    j0 = j0 if j0 > 1e-9 * total else 0.0
+    if j0 > 0:
+        young = 1.0 / j0
+    elif jk.sum() > 0:
+        young = 1.0 / jk.sum()                  # no instantaneous compliance: long-term
+    else:
+        raise ValueError("the fit is not positive: every coefficient is zero")
+    creep = ExponentialCreep(a=young * (j0 + jk.sum()), b=young * flow,
+                             d=tuple(-young * jk), tau=tuple(lam), name="fit")
+    return creep, young
+
+
+def fit_creep_compliance(t, compliance, *, terms_per_decade=2, times=None, dashpot=False,
+                         noise=0.01):
+    """Prony series fitted to a tensile creep-compliance table.
+
+    D(t) = D0 + sum_i D_i (1 - exp(-t/tau_i)) [+ t/eta] with fixed log-spaced tau_i
+    (``terms_per_decade`` per decade over the table's positive times) and D0, D_i, 1/eta
+    >= 0 by the bounds of :func:`scipy.optimize.least_squares` on the relative misfit
+    (linear in the coefficients: a convex problem, unique, with no start guess; free
+    tau_i would make it non-convex, with terms that merge or leave the data's window).
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s], ascending, >= 0 (at least 3).
+    compliance : array_like
+        D(t) = strain / stress under a constant stress [1/Pa], > 0 (0 allowed at t = 0),
+        non-decreasing.
+    terms_per_decade : int
+        Retardation times per decade (2: exact for a spectrum on that grid, 0.5 % rms for
+        a power-law creep t^0.3 over four decades; 1 gives 0.6 %).
+    times : array_like, optional
+        The retardation times [s] instead of the log-spaced ones.
+    dashpot : bool
+        Add a flow term t/eta (a fluid).
+    noise : float
+        Relative decrease of the data tolerated as measurement noise [1].
+
+    Returns
+    -------
+    PronyFit
+        phi = E D(t) with E = 1/D0 (or 1/D(inf) when D0 = 0).
+
+    Raises
+    ------
+    ValueError
+        Bad data (not positive, not ascending, decreasing beyond ``noise``) or a fit
+        that is not a positive, non-decreasing creep function.
+    """
+    what = "creep compliance"
+    t, (d,) = _fit_columns(what, t, [("the compliance", compliance)], positive_x=False,
+                           zero_at_origin=True)
+    _check_monotone(what, t[d > 0], d[d > 0], +1, noise, "s")
+    pos = t[t > 0]
+    lam = _log_times(pos[0], pos[-1], terms_per_decade, times)
+    cols = [np.ones_like(t)] + [-np.expm1(-t / tk) for tk in lam] + ([t] if dashpot else [])
+    a = np.column_stack(cols)
+    c = _nonnegative_fit(a, d)
+    flow = c[-1] if dashpot else 0.0
+    creep, young = _creep_from_compliance(c[0], c[1:1 + lam.size], lam, flow)
+    return _fit_result(creep, young, a @ c, d, lam, "creep")
+
+
+def _creep_from_relaxation(e_inf, ek, tau):
+    """Interconversion: the compliance of E(t) = e_inf + sum ek exp(-t/tau), exactly.
+
+    With M(s) = s L[E](s) = e_inf + sum ek s tau/(1 + s tau), s L[D](s) = 1/M(s), whose
+    poles s_j = -1/lam_j (one between consecutive -1/tau_i, one in (-1/tau_max, 0) when
+    e_inf > 0, else s = 0: a dashpot) give D = 1/E0 + sum D_j (1 - exp(-t/lam_j)) + t/eta,
+    D_j = lam_j / M'(s_j) > 0, 1/eta = 1 / sum ek tau."""
+    from scipy.optimize import brentq           # heavy; only the fits need it
+
+    e0 = e_inf + ek.sum()
+    if e0 <= 0:
+        raise ValueError("the fit is not positive: every coefficient is zero")
+    # a coefficient below 1e-9 E0 is the solver's tolerance, not the data: dropped (it has
+    # no effect, its root would hug a pole, and a tiny E_inf would stand in for a dashpot)
+    keep = ek > 1e-9 * e0
+    ek, tau = ek[keep], tau[keep]
+    e_inf = e_inf if e_inf > 1e-9 * e0 else 0.0
+    if ek.size == 0:
+        return ExponentialCreep(name="fit"), e0
+
+    def m(x):                                   # M(-x), x = -s > 0
+        return e_inf + np.sum(ek * (1.0 - 1.0 / (1.0 - x * tau)))
+
+    def dm(x):                                  # M'(s) at s = -x
+        return np.sum(ek * tau / (1.0 - x * tau) ** 2)
+
+    poles = np.sort(1.0 / tau)                  # x = 1/tau_i, ascending
+    edges = list(zip(poles[:-1], poles[1:]))
+    if e_inf > 0:
+        edges.insert(0, (0.0, poles[0]))
+    lam, dj = [], []
+    for lo, hi in edges:
+        eps = 1e-12 * (hi - lo)
+        # M(0) = e_inf > 0 is finite: the first bracket starts at 0 (its root may be tiny)
+        x = brentq(m, lo + eps if lo > 0 else 0.0, hi - eps, xtol=1e-300, rtol=1e-15,
+                   maxiter=500)
+        lam.append(1.0 / x)
+        dj.append((1.0 / x) / dm(x))
+    flow = 0.0 if e_inf > 0 else 1.0 / np.sum(ek * tau)
+    creep, young = _creep_from_compliance(1.0 / e0, np.array(dj), np.array(lam), flow)
+    return creep, young
+
+
+def fit_relaxation_modulus(t, modulus, *, terms_per_decade=2, times=None, noise=0.01):
+    """Prony series fitted to a relaxation-modulus table, converted to a creep function.
+
+    E(t) = E_inf + sum_i E_i exp(-t/tau_i) (generalised Maxwell) with fixed log-spaced
+    tau_i and E_inf, E_i >= 0 (as :func:`fit_creep_compliance`), then converted exactly to
+    the creep compliance (:func:`_creep_from_relaxation`: retardation times interlaced with
+    the relaxation times; a dashpot when E_inf = 0).
+
+    Parameters
+    ----------
+    t : array_like
+        Times [s], ascending, >= 0 (at least 3).
+    modulus : array_like
+        E(t) = stress / strain under a constant strain [Pa], > 0, non-increasing.
+    terms_per_decade : int
+        Relaxation times per decade.
+    times : array_like, optional
+        The relaxation times [s] instead of the log-spaced ones.
+    noise : float
+        Relative increase of the data tolerated as measurement noise [1].
+
+    Returns
+    -------
+    PronyFit
+        phi normalised by E0 = E_inf + sum E_i; ``rms_error``, ``max_error`` of E(t).
+
+    Raises
+    ------
+    ValueError
+        As :func:`fit_creep_compliance` (here the data must not increase).
+    """
+    what = "relaxation modulus"
+    t, (e,) = _fit_columns(what, t, [("the modulus", modulus)], positive_x=False)
+    _check_monotone(what, t, e, -1, noise, "s")
+    pos = t[t > 0]
+    tau = _log_times(pos[0], pos[-1], terms_per_decade, times)
+    a = np.column_stack([np.ones_like(t)] + [np.exp(-t / tk) for tk in tau])
+    c = _nonnegative_fit(a, e)
+    creep, young = _creep_from_relaxation(c[0], c[1:], tau)
+    return _fit_result(creep, young, a @ c, e, tau, "relaxation")
+
+
+def fit_dynamic_moduli(frequency, storage, loss, *, terms_per_decade=2, times=None,
+                       noise=0.01):
+    """Prony series fitted to storage and loss moduli over frequency (a DMA sweep).
+
+    E'(w) = E_inf + sum_i E_i (w tau_i)^2 / (1 + (w tau_i)^2),
+    E''(w) = sum_i E_i w tau_i / (1 + (w tau_i)^2), w = 2 pi f, with fixed log-spaced
+    tau_i over 1/(2 pi f_max) .. 1/(2 pi f_min) and E_inf, E_i >= 0, both moduli fitted
+    together (relative misfit), then converted to the creep function as
+    :func:`fit_relaxation_modulus`.
+
+    Parameters
+    ----------
+    frequency : array_like
+        Frequencies f [Hz], ascending, > 0 (at least 3).
+    storage, loss : array_like
+        E'(f) and E''(f) [Pa], > 0; E' non-decreasing with f.
+    terms_per_decade : int
+        Relaxation times per decade.
+    times : array_like, optional
+        The relaxation times [s] instead of the log-spaced ones.
+    noise : float
+        Relative decrease of E' tolerated as measurement noise [1].
+
+    Returns
+    -------
+    PronyFit
+        ``rms_error``, ``max_error`` over E' and E'' together.
+
+    Raises
+    ------
+    ValueError
+        As :func:`fit_creep_compliance`.
+    """
+    what = "dynamic moduli"
+    f, (e1, e2) = _fit_columns(what, frequency, [("the storage modulus", storage),
+                                                 ("the loss modulus", loss)])
+    _check_monotone("storage modulus", f, e1, +1, noise, "Hz")
+    w = 2.0 * np.pi * f
+    tau = _log_times(1.0 / w[-1], 1.0 / w[0], terms_per_decade, times)
+    wt = w[:, None] * tau[None, :]
+    a1 = np.column_stack([np.ones_like(w), wt ** 2 / (1.0 + wt ** 2)])
+    a2 = np.column_stack([np.zeros_like(w), wt / (1.0 + wt ** 2)])
+    a = np.vstack([a1, a2])
+    data = np.concatenate([e1, e2])
+    c = _nonnegative_fit(a, data)
+    creep, young = _creep_from_relaxation(c[0], c[1:], tau)
+    return _fit_result(creep, young, a @ c, data, tau, "dynamic")
 
 
 @dataclass(frozen=True)

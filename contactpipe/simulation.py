@@ -251,12 +251,29 @@ class _Problem:
             spectra = [body_spectra(b, n1, n2, d1, d2, backend, nthreads) for b in self.bodies]
             self.conv = convolver(n1, n2, backend, int(nthreads))
             fresh = self.new_memories()
-            self.op_first = ContactOperator(*spectra, *self._weights(fresh, True), self.conv)
+            self.spectra = spectra
+            self._operators = {}
+            self.op_first = self.operator(self._weights(fresh, True))
             self.hist_kernels = history_kernels(*(s if m is not None else None
                                                   for s, m in zip(spectra, fresh)))
-            self.op_next = ContactOperator(*spectra, *self._weights(fresh, False), self.conv) \
+            self.op_next = self.operator(self._weights(fresh, False)) \
                 if self.t.size > 1 else self.op_first
         self._check_finite(d1, d2)
+
+    def operator(self, weights) -> ContactOperator:
+        """The operator of an instant whose traction has the creep weights ``weights``
+        (one per body), made once per distinct tuple: a time rule may weight t0, its start
+        steps and the later steps apart."""
+        key = tuple(float(w) for w in weights)
+        if key not in self._operators:
+            self._operators[key] = ContactOperator(*self.spectra, *key, self.conv)
+        return self._operators[key]
+
+    def instant_weights(self, mems) -> list:
+        """The creep weights of the next instant's traction, one per body [1]."""
+        return [0.0 if b.rigid else float(m.instant_weight) if m is not None
+                else (float(b.creep.phi0) if b.has_memory else 1.0)
+                for b, m in zip(self.bodies, mems)]
 
     def new_memories(self) -> list:
         """A fresh memory per viscoelastic body (None for the others)."""
@@ -381,7 +398,7 @@ def _young(part) -> str:
 def _step(pb: _Problem, st: State, k: int) -> dict:
     """Solve instant ``k`` from ``st`` (updated in place); return its record."""
     first = k == 0
-    op = pb.op_first if first else pb.op_next
+    op = pb.operator(pb.instant_weights(st.memories))
     pairs0 = pb.conv.pairs
     U = pb.history(st, k)
     T = np.array([pb.T1[k], pb.T2[k]])

@@ -24,8 +24,10 @@ Cases (each measured against its closed form):
     order); Zener (E_inf = E0/3, retardation time 0.5 s) under the same ramp (phi is not
     linear in t, so even the linear rule has a time error). Error: a(t)^3 against
     Lee-Radok's hereditary integral, a = sqrt(R omega3), worst over t >= 0.25 s (all t for
-    the step load) (``lr_a3``). Both time rules, ``solver.time_rule`` = "linear" (the
-    default, second order) and "step_start" (the paper's rectangle rule).
+    the step load) (``lr_a3``). The time rules ``solver.time_rule`` = "auto" (the rule
+    the presets are measured with: "linear" where it is monotone, else "bdf2"; its rows
+    repeat the resolved rule's run), "bdf2" (second order, L-stable), "linear" (second
+    order, A-stable) and "step_start" (the paper's rectangle rule).
 
 ``vf``
     Viscoelastic fretting, the paper's figure-3 case (rigid ball on Maxwell, tau = t'),
@@ -33,7 +35,7 @@ Cases (each measured against its closed form):
     against the same grid run with 4 times the largest step count (640 steps by default)
     and the linear rule: the T-omega1 loop (``vf_loop``), the shear and the pressure along
     x1 through the centre (RMS over the line, worst instant, over mu p_H and p_H:
-    ``vf_traction``, ``vf_pressure``). Both time rules. This is where the steps per cycle
+    ``vf_traction``, ``vf_pressure``). Every time rule. This is where the steps per cycle
     matter: the elastic loop is rate independent (its errors do not change with the
     steps once the mesh hits the turning points).
 
@@ -78,11 +80,16 @@ from matplotlib.ticker import NullFormatter
 
 import contactpipe as cp
 from contactpipe.materials import maxwell as maxwell_creep, zener as zener_creep
+from contactpipe.solver.memory import resolve_rule
+from time_integration import scene_accepts
 
 GRIDS = (16, 24, 32, 48, 64, 96, 128, 192, 256)
 GRIDS_FULL = GRIDS + (384, 512)
 STEPS, STEPS_FULL = (5, 10, 40, 160), (5, 10, 40, 160, 640)
-RULES = ("linear", "step_start")
+#: "auto" first: its runs repeat those of the rule it resolves to (not run twice)
+RULES = ("auto", "bdf2", "linear", "step_start")
+#: the time rule the presets are measured with (the package's recommended rule)
+PRESET_RULE = "auto"
 CASES = ("hertz", "md", "lr_step", "lr_ramp", "lr_zener", "vf")
 VF_GRID, VF_GRID_QUICK = 48, 24
 VF_REF_FACTOR = 4
@@ -294,11 +301,26 @@ def plan_runs(args):
     return todo
 
 
+def resolved_rule(case, steps, rule):
+    """The rule "auto" applies to the case's creep function at its step (the others as
+    given): an "auto" run equal to a measured one is not run twice."""
+    if rule != "auto" or case in ("hertz", "md"):
+        return rule
+    window = c.RELAXATION_TIME if case == "vf" else LR_WINDOW
+    creep = maxwell_creep(c.RELAXATION_TIME) if case == "vf" else lr_creep(case)
+    return resolve_rule(creep, window / steps, "auto")
+
+
 def execute(todo):
     rows = []
     vf_ref = VF_REF_FACTOR * max([s for case, _, s, _ in todo if case == "vf"] or [0])
+    done = {}
     for i, (case, n, s, rule) in enumerate(todo):
-        if case == "hertz":
+        concrete = resolved_rule(case, s, rule)
+        if (case, n, s, concrete) in done:
+            row, errs = done[(case, n, s, concrete)]
+            row = {**row, "time_rule": rule}
+        elif case == "hertz":
             row, errs = run_hertz(n)
         elif case == "vf":
             row, errs = run_vf(n, s, rule, vf_ref)
@@ -306,6 +328,7 @@ def execute(todo):
             row, errs = run_md(n, s)
         else:
             row, errs = run_lr(case, n, s, rule)
+        done[(case, n, s, concrete)] = (row, errs)
         for measure, e in errs.items():
             rows.append({**row, "measure": measure, "error": float(e)})
         shown = ", ".join(f"{k} {v:.2e}" for k, v in errs.items())
@@ -369,7 +392,7 @@ def presets(rows):
     """Cells across the contact and steps per cycle / relaxation time of each preset.
 
     For each target: the cheapest measured run (robust: every finer grid and longer mesh
-    measured reaches it too) of each group of measures, with the linear time rule:
+    measured reaches it too) of each group of measures, with the time rule PRESET_RULE:
 
     - cells across the contact diameter: the largest of the elastic loop's (stick radius,
       traction mean, energy) and the Lee-Radok cases' (a^3);
@@ -381,7 +404,7 @@ def presets(rows):
     out = {}
     lr_cases = sorted({r["case"] for r in rows if r["case"].startswith("lr_")})
     for name, target in PRESETS.items():
-        entry = {"target": target, "time_rule": "linear"}
+        entry = {"target": target, "time_rule": PRESET_RULE}
         notes, cells, per_cycle, per_relax = [], [], [], []
         md = cheapest(rows, PRESET_MEASURES["md"], target)
         if md:
@@ -391,7 +414,7 @@ def presets(rows):
         elif any(r["case"] == "md" for r in rows):
             notes.append(f"elastic loop: {', '.join(PRESET_MEASURES['md'])} not all within "
                          f"{target:g} on any grid/steps measured")
-        vf = cheapest(rows, PRESET_MEASURES["vf"], target, rule="linear", case="vf")
+        vf = cheapest(rows, PRESET_MEASURES["vf"], target, rule=PRESET_RULE, case="vf")
         if vf:
             per_cycle.append(vf["row"]["steps_per_unit"])
             per_relax.append(vf["row"]["steps"])      # window = one relaxation time
@@ -402,7 +425,7 @@ def presets(rows):
         lr_runs = {}
         for case in lr_cases:
             m = f"{case}_a3"
-            lr = cheapest(rows, (m,), target, rule="linear", case=case)
+            lr = cheapest(rows, (m,), target, rule=PRESET_RULE, case=case)
             if lr:
                 lr_runs[case] = _run_info(lr, (m,))
                 cells.append(lr["row"]["cells_across"])
@@ -410,12 +433,15 @@ def presets(rows):
             else:
                 notes.append(f"{case}: a^3 not within {target:g} on any grid/steps measured")
         entry["lee_radok"] = lr_runs
-        ss = {}                                          # the step-start rule, for information
-        for case in lr_cases + (["vf"] if vf or any(r["case"] == "vf" for r in rows) else []):
-            ms = PRESET_MEASURES["vf"] if case == "vf" else (f"{case}_a3",)
-            r = cheapest(rows, ms, target, rule="step_start", case=case)
-            ss[case] = None if r is None else _run_info(r, ms)
-        entry["step_start_rule"] = ss
+        for other in RULES:                              # the other rules, for information
+            if other == PRESET_RULE:
+                continue
+            ss = {}
+            for case in lr_cases + (["vf"] if any(r["case"] == "vf" for r in rows) else []):
+                ms = PRESET_MEASURES["vf"] if case == "vf" else (f"{case}_a3",)
+                r = cheapest(rows, ms, target, rule=other, case=case)
+                ss[case] = None if r is None else _run_info(r, ms)
+            entry[f"{other}_rule"] = ss
         entry["cells_across_contact"] = int(math.ceil(round(max(cells), 6))) if cells else None
         entry["steps_per_cycle"] = int(math.ceil(round(max(per_cycle), 6))) if per_cycle else None
         entry["steps_per_relaxation"] = (int(math.ceil(round(max(per_relax), 6))) if per_relax
@@ -436,7 +462,7 @@ def recommendation(rows):
                         "vf_traction", "vf_pressure"):
             if not any(r["measure"] == measure for r in rows):
                 continue
-            for rule in (("linear", "step_start") if measure[:3] in ("lr_", "vf_")
+            for rule in (RULES if measure[:3] in ("lr_", "vf_")
                          else (None,)):
                 best = cheapest(rows, (measure,), target, rule=rule)
                 what = MEASURE_LABEL[measure] + (f" ({rule} rule)" if rule else "")
@@ -492,7 +518,7 @@ def plot(rows, out):
     grids = sorted({r["grid"] for r in rows})
     cmap = plt.cm.viridis(np.linspace(0, 0.9, len(grids)))
     color = dict(zip(grids, cmap))
-    marker = {"linear": "o", "step_start": "s", "n/a": "o"}
+    marker = {"auto": "*", "bdf2": "D", "linear": "o", "step_start": "s", "n/a": "o"}
     for ax, m in zip(axes.flat, measures):
         sel = [r for r in rows if r["measure"] == m and np.isfinite(r["error"])]
         floor = 1e-16
@@ -529,7 +555,9 @@ def plot(rows, out):
         ax.axis("off")
     handles = [plt.Line2D([], [], ls="", marker="o", color=color[g], label=f"{g}²")
                for g in grids]
-    handles += [plt.Line2D([], [], ls="", marker="o", color="k", label="linear rule / elastic"),
+    handles += [plt.Line2D([], [], ls="", marker="*", color="k", label="auto rule"),
+                plt.Line2D([], [], ls="", marker="D", color="k", label="bdf2 rule"),
+                plt.Line2D([], [], ls="", marker="o", color="k", label="linear rule / elastic"),
                 plt.Line2D([], [], ls="", marker="s", mfc="none", color="k",
                            label="step-start rule"),
                 plt.Line2D([], [], color="crimson", label="Pareto front (grid²/steps)"),
@@ -554,7 +582,8 @@ def main(argv=None):
     todo = plan_runs(args)
     print(f"{len(todo)} runs (OPENBLAS_NUM_THREADS = {c.blas_threads()})")
     t0 = time.perf_counter()
-    rows = execute(todo)
+    with scene_accepts(*RULES):
+        rows = execute(todo)
     print(f"total {time.perf_counter() - t0:.1f} s")
     csv_path, nc = write_table(rows, out)
     png = plot(rows, out)
@@ -562,7 +591,7 @@ def main(argv=None):
     pre_path = out / "accuracy_presets.json"
     with open(pre_path, "w") as f:
         json.dump({"description": (
-            "Accuracy presets measured by studies/speed_accuracy.py (linear time rule). "
+            f"Accuracy presets measured by studies/speed_accuracy.py ({PRESET_RULE} time rule). "
             "For each target, the cheapest measured run whose errors are all within it "
             "(and stay within it on every finer grid and longer mesh measured). "
             "cells_across_contact: the largest contact diameter over the cell size, the "

@@ -38,9 +38,10 @@ def test_tabulated_creep_uses_direct_sum():
     assert isinstance(make_memory(maxwell(1.0), 0.1, "linear", (2,)), RecursiveMemory)
 
 
-def test_recursion_state_does_not_grow():
+@pytest.mark.parametrize("rule", ["bdf2", "linear", "step_start"])
+def test_recursion_state_does_not_grow(rule):
     """Memory per step is flat: the recursion holds the same arrays after 10 and 1000 steps."""
-    m = RecursiveMemory(prony([[0.5, 0.3]], 1.5), 0.01, "linear", (8, 8))
+    m = RecursiveMemory(prony([[0.5, 0.3]], 1.5), 0.01, rule, (8, 8))
     sizes = []
     for k in range(1000):
         m.commit(np.full((8, 8), float(k)))

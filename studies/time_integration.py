@@ -1,0 +1,490 @@
+"""Time integration of the hereditary integral: stability, oscillation, order, and the
+pressure field against Lee-Radok, for every creep law (issue 9; docs/time-integration.md).
+
+Laws (normalised creep functions; tau = 1 s): Maxwell (t' = tau), Zener E0/Einf = 2 and
+100, Kelvin-Voigt (no instantaneous elasticity), a 3-term Prony series with a dashpot
+(c = 0.5, 1, 2 at 0.1, 1, 5 s; t' = 10 s). Rules and candidates:
+
+``auto``         the package's recommended rule: "linear" where its error keeps its sign
+                 for the creep function and step, else "bdf2"
+``bdf2``         exponentially fitted BDF2 on the internal variables, two
+                 exponential-Euler start steps after a jump at t0, one trapezoid otherwise
+``bdf2_plain``   plain BDF2 started by two BDF1 steps (= BDF2 convolution quadrature)
+``bdf2_1start``  the fitted rule with a single exponential-Euler start step
+``linear``       traction linear within a step, exponentials integrated exactly
+``linear_ds``    "linear" after one exponential-Euler step (a damped start)
+``step_start``   the paper's rule (each increment at its step's start)
+``tr_bdf2``      TR-BDF2 (gamma = 2 - sqrt 2; two solves per step): scalar model only
+
+Parts, each printed as a table:
+
+1. amplification factors of the traction error under a held displacement (the homogeneous
+   error recursion, :func:`contactpipe.solver.memory.error_amplification`), and the
+   step-start rule's largest stable step;
+2. the held-displacement model problem (no contact): the traction for a smooth prescribed
+   history H(t) = 1 - cos 2t + t/2, error against a 20 480-step run of the same rule and
+   observed order (40 / 80 / 160 steps; TR-BDF2 at equal solves);
+3. the Lee-Radok step load on a rigid sphere (R = 18 mm, W = 1 kN, E = 105 GPa, nu = 0.3,
+   frictionless), through ``cp.simulate``: radius from the contact area (cells, t >= 0.25
+   tau), holes (p = 0 inside 0.8 a), zigzag of the centre pressure, field error inside
+   0.8 a (t >= 0.5 tau) against Lee-Radok p(r, t), a^3 from the approach; Kelvin-Voigt on
+   the issue's 96^2 over 1.6 mm with 40 steps, Zener 100 on 96^2 auto with 20 steps (0.1
+   tau), the others on 48^2 auto with 20 steps;
+4. the order of the pressure FIELD in dt, on a rigid punch with a spherical face held in
+   full contact (no cell enters or leaves), 16^2, W = 1 -> 1.5 kN: observed order from 20
+   / 40 / 80 / 160 steps.
+
+    python studies/time_integration.py [--out DIR] [--quick]
+
+Writes ``time_integration.csv`` (every measured row), ``time_integration.png`` (the
+figure of docs/figures/) and prints the tables. ``--quick``: small grids, few steps, two
+laws and three rules in parts 3-4 (a smoke run of seconds). The candidates that are not
+rules of the package are memories built here and handed to ``cp.simulate`` by replacing
+``contactpipe.simulation.make_memory`` for the run (:func:`use_memory`).
+"""
+from __future__ import annotations
+
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
+
+import contextlib
+import csv
+import math
+import sys
+import tempfile
+
+import numpy as np
+
+import matplotlib.pyplot as plt
+
+import contactpipe as cp
+import contactpipe.scene as scene_module
+import contactpipe.simulation as simulation_module
+from contactpipe import analytic as an
+from contactpipe.materials import kelvin_voigt, maxwell, prony, step_start_stable_step, zener
+from contactpipe.solver import memory as mem
+
+E, NU, R, W = c.E_GLASSY, c.NU_STEEL, c.R, c.W
+PRONY3 = [[0.5, 0.1], [1.0, 1.0], [2.0, 5.0]]
+LAWS = {
+    "maxwell": ({"creep": "maxwell", "relaxation_time": 1.0}, maxwell(1.0)),
+    "zener2": ({"creep": "zener", "relaxed_young": E / 2, "retardation_time": 1.0},
+               zener(E, E / 2, 1.0)),
+    "zener100": ({"creep": "zener", "relaxed_young": E / 100, "retardation_time": 1.0},
+                 zener(E, E / 100, 1.0)),
+    "kelvin_voigt": ({"creep": "kelvin_voigt", "retardation_time": 1.0}, kelvin_voigt(1.0)),
+    "prony3": ({"creep": "prony", "terms": PRONY3, "relaxation_time": 10.0},
+               prony(PRONY3, 10.0)),
+}
+RULES = ("bdf2", "linear", "step_start")
+CANDIDATES = ("auto", "bdf2", "bdf2_plain", "bdf2_1start", "linear", "linear_ds", "step_start")
+
+
+@contextlib.contextmanager
+def scene_accepts(*names):
+    """Within the block the scene accepts ``solver.time_rule`` = each of ``names`` (issue 9,
+    phase 2 adds "auto" and "bdf2" to the scene's list; until then the studies widen it
+    for their runs, and restore it after)."""
+    old = scene_module.TIME_RULES
+    scene_module.TIME_RULES = tuple(old) + tuple(n for n in names if n not in old)
+    try:
+        yield
+    finally:
+        scene_module.TIME_RULES = old
+
+
+# --------------------------------------------------------------------------- candidates
+class _OneStart(mem.RecursiveMemory):
+    """The fitted "bdf2" with a single exponential-Euler start step after a jump."""
+
+    @property
+    def start_steps(self):
+        return 1 if self.start in ("linear", "exponential_euler") else mem.BDF2_START
+
+
+class _DampedLinear(mem.RecursiveMemory):
+    """"linear" after one exponential-Euler step (a damped start)."""
+
+    def coefficients(self, k):
+        if k == 1:
+            x = self.dt / self.tau
+            zero = np.zeros_like(self.tau)
+            return (np.exp(-x), zero, zero, -np.expm1(-x)), (1.0, 0.0, 0.0, self.dt)
+        return super().coefficients(k)
+
+
+def candidate_memory(name):
+    """make_memory's signature, for a candidate."""
+    def make(creep, dt, rule, shape):
+        if name == "bdf2_plain":
+            return mem.RecursiveMemory(creep, dt, "bdf2", shape, fitted=False)
+        if name == "bdf2_1start":
+            return _OneStart(creep, dt, "bdf2", shape)
+        if name == "linear_ds":
+            return _DampedLinear(creep, dt, "linear", shape)
+        return mem.make_memory(creep, dt, name, shape)
+    return make
+
+
+@contextlib.contextmanager
+def use_memory(name):
+    """cp.simulate with a candidate's memory (``contactpipe.simulation.make_memory``)."""
+    original = simulation_module.make_memory
+    simulation_module.make_memory = candidate_memory(name)
+    try:
+        yield
+    finally:
+        simulation_module.make_memory = original
+
+
+# --------------------------------------------------------------------------- 1: amplification
+def amplification_rows(steps=(0.01, 0.1, 1.0, 10.0)):
+    rows = []
+    for law, (_, creep) in LAWS.items():
+        for rule in ("step_start", "linear", "bdf2"):
+            for dt in steps:
+                try:
+                    g = mem.error_amplification(creep, dt, rule)
+                except ValueError:
+                    rows.append(dict(part="amplification", law=law, rule=rule, dt=dt,
+                                     value=math.nan, note="no weight"))
+                    continue
+                big = g[np.abs(g) > 1e-6]
+                lead = big[0] if big.size else 0.0
+                neg = big[big.real < 0]
+                rows.append(dict(part="amplification", law=law, rule=rule, dt=dt,
+                                 value=float(abs(lead)), signed=float(np.real(lead)),
+                                 negative=float(np.abs(neg).max()) if neg.size else 0.0))
+        rows.append(dict(part="bound", law=law, rule="step_start",
+                         value=step_start_stable_step(creep),
+                         small_step=_small_step_bound(creep)))
+    return rows
+
+
+def _small_step_bound(creep):
+    rate = float(creep.derivative(0.0))
+    return math.inf if rate <= 0 else 2.0 * creep.phi0 / rate
+
+
+# --------------------------------------------------------------------------- 2: scalar model
+def _history(t):
+    return 1.0 - np.cos(2.0 * t) + 0.5 * t
+
+
+def held_displacement(creep, steps, rule, t_end=2.0):
+    """Tractions at the instants for the prescribed history H(t) (one solve per step)."""
+    m = candidate_memory(rule)(creep, t_end / steps, rule, ())
+    out = []
+    for tk in np.linspace(0.0, t_end, steps + 1):
+        w = m.instant_weight
+        s = 0.0 if w == 0 else (_history(tk) - float(m.known())) / w
+        m.commit(np.array(s))
+        out.append(s)
+    return np.array(out)
+
+
+def tr_bdf2(creep, steps, t_end=2.0):
+    """TR-BDF2 on (I, zeta_i) with the constraint phi0 s + b I + c.zeta = H at each stage."""
+    g = 2.0 - math.sqrt(2.0)
+    h = t_end / steps
+    tau = np.asarray(creep.tau, float)
+    cc, b, phi0 = -np.asarray(creep.d, float), float(creep.b), float(creep.phi0)
+    z, i_, s = np.zeros_like(tau), 0.0, 0.0
+    out = [s]
+    A, B, C = 1.0 / (g * (2.0 - g)), (1.0 - g) ** 2 / (g * (2.0 - g)), (1.0 - g) / (2.0 - g)
+    for k in range(steps):
+        t = k * h
+        q = g * h / 2.0                         # trapezoid stage to t + g h
+        zk = (z * (1 - q / tau) + q / tau * s) / (1 + q / tau)   # + (q/tau)/(1+q/tau) s_g
+        wz = (q / tau) / (1 + q / tau)
+        ik, wi = i_ + q * s, q
+        s_g = (_history(t + g * h) - b * ik - cc @ zk) / (phi0 + b * wi + cc @ wz)
+        z_g, i_g = zk + wz * s_g, ik + wi * s_g
+        zk = (A * z_g - B * z) / (1 + C * h / tau)                 # BDF2 stage to t + h
+        wz = (C * h / tau) / (1 + C * h / tau)
+        ik, wi = A * i_g - B * i_, C * h
+        s = (_history(t + h) - b * ik - cc @ zk) / (phi0 + b * wi + cc @ wz)
+        z, i_ = zk + wz * s, ik + wi * s
+        out.append(s)
+    return np.array(out)
+
+
+def scalar_rows(steps=(40, 80, 160), reference=20480):
+    rows = []
+    for law, (_, creep) in LAWS.items():
+        for rule in ("bdf2", "bdf2_plain", "linear", "step_start", "tr_bdf2"):
+            if rule == "step_start" and creep.phi0 == 0:
+                continue
+            run = (lambda n: tr_bdf2(creep, n)) if rule == "tr_bdf2" else \
+                (lambda n: held_displacement(creep, n, rule))
+            ref = run(reference)
+            errs = []
+            for n in steps:
+                s = run(n)
+                t = np.linspace(0.0, 2.0, n + 1)
+                late = t >= 0.25
+                errs.append(float(np.abs(s[late] - ref[::reference // n][late]).max()
+                                  / np.abs(ref).max()))
+            order = math.log2(errs[-2] / errs[-1]) if errs[-1] > 0 else math.inf
+            solves = 2 if rule == "tr_bdf2" else 1
+            rows.append(dict(part="scalar", law=law, rule=rule, steps=steps[-1],
+                             solves=solves * steps[-1], value=errs[-1], order=order,
+                             errors=" ".join(f"{e:.2e}" for e in errs)))
+    return rows
+
+
+# --------------------------------------------------------------------------- 3: Lee-Radok
+def lee_radok_scene(law, n, steps, size="auto"):
+    return cp.Scene(name=f"ti-{law}", geometry={"shape": "sphere", "radius": R},
+                    indenter={"material": "rigid"},
+                    halfspace={"material": "viscoelastic", "young": E, "poisson": NU,
+                               **LAWS[law][0]},
+                    load={"time": [0.0, 2.0], "normal_force": W},
+                    grid={"points": [n, n], "size": size}, time={"steps": steps},
+                    solver={"time_rule": "linear", "tolerance": 1e-10})
+
+
+def kelvin_voigt_pressure(r, t, tau=1.0):
+    """Lee-Radok pressure [Pa], Kelvin-Voigt (E the long-term modulus):
+    p = 2E/(pi R (1 - nu^2)) (h + tau dh/dt), h = sqrt(a^2 - r^2)."""
+    a_inf3 = 3 * W * R * (1 - NU ** 2) / (4 * E)
+    a = (a_inf3 * -np.expm1(-t / tau)) ** (1 / 3)
+    h = np.sqrt(np.clip(a ** 2 - np.asarray(r) ** 2, 0.0, None))
+    rate = np.divide(a_inf3 * np.exp(-t / tau) / (3 * tau * a), h, out=np.zeros_like(h),
+                     where=h > 0)
+    return 2 * E / (np.pi * R * (1 - NU ** 2)) * (h + tau * rate)
+
+
+def lee_radok_p(law, r, t):
+    if law == "kelvin_voigt":
+        return kelvin_voigt_pressure(r, t)
+    return an.lee_radok_pressure(r, t, W, R, E, NU, LAWS[law][1], n_steps=1000)
+
+
+def zigzag(pc):
+    """Largest min(|D_k|, |D_k+1|, |D_k+2|) of three alternating increments D of pc."""
+    d = np.diff(pc)
+    amp = [min(abs(d[k]), abs(d[k + 1]), abs(d[k + 2])) for k in range(len(d) - 2)
+           if d[k] * d[k + 1] < 0 and d[k + 1] * d[k + 2] < 0]
+    return max(amp, default=0.0)
+
+
+def step_load_measures(ds, law, t_min=0.25, t_field=0.5):
+    t = ds.time.values
+    x = ds.x1.values
+    d = float(x[1] - x[0])
+    r = np.hypot(*np.meshgrid(x, x, indexing="ij"))
+    creep = LAWS[law][1]
+    a_ex = an.lee_radok_sphere(t, W, R, E, NU, creep).contact_radius
+    a_area = np.sqrt(ds.contact_area.values / np.pi)
+    p = ds.p.values
+    n = p.shape[1]
+    pc = p[:, n // 2 - 1:n // 2 + 1, n // 2 - 1:n // 2 + 1].mean(axis=(1, 2))
+    late = t >= t_min
+    field = 0.0
+    for k in np.flatnonzero(t >= t_field):
+        inside = r < 0.8 * a_ex[k]
+        centre = float(lee_radok_p(law, np.array([0.0]), t[k])[0])
+        field = max(field, float(np.abs(p[k][inside] - lee_radok_p(law, r[inside], t[k])).max()
+                                 / centre))
+    a3 = (R * np.clip(ds.omega3.values, 0, None)) ** 1.5
+    return {"radius_cells": float(np.abs(a_area[late] - a_ex[late]).max() / d),
+            "holes": max(int(np.sum((p[k] == 0) & (r < 0.8 * a_ex[k]))) for k in range(1, t.size)),
+            "zigzag": zigzag(pc[1:]) / max(pc[-1], 1e-300), "field": field,
+            "a3": float(np.abs(a3[late] / a_ex[late] ** 3 - 1).max()), "pc": pc, "t": t}
+
+
+QUICK_CANDIDATES = ("auto", "bdf2", "linear")
+
+
+def lee_radok_cases(quick):
+    if quick:
+        return {"kelvin_voigt": (24, 10, [1.6e-3] * 2), "maxwell": (24, 10, "auto")}
+    return {"kelvin_voigt": (96, 40, [1.6e-3] * 2), "zener100": (96, 20, "auto"),
+            "maxwell": (48, 20, "auto"), "zener2": (48, 20, "auto"), "prony3": (48, 20, "auto")}
+
+
+def lee_radok_rows(quick, keep):
+    rows = []
+    for law, (n, steps, size) in lee_radok_cases(quick).items():
+        for name in QUICK_CANDIDATES if quick else CANDIDATES:
+            if name == "step_start" and LAWS[law][1].phi0 == 0:
+                continue
+            with use_memory(name):
+                ds, wall = c.run(lee_radok_scene(law, n, steps, size))
+            m = step_load_measures(ds, law)
+            if law == "kelvin_voigt" and name in ("bdf2", "linear"):
+                keep[name] = (ds, m)
+            rows.append(dict(part="lee_radok", law=law, rule=name, grid=n, steps=steps,
+                             value=m["field"], radius_cells=m["radius_cells"],
+                             holes=m["holes"], zigzag=m["zigzag"], a3=m["a3"], wall_s=wall))
+            print(f"  {law:13s} {n}^2 {steps:3d} steps {name:12s} radius "
+                  f"{m['radius_cells']:.2f} cells, holes {m['holes']:4d}, zigzag "
+                  f"{m['zigzag']:.1e}, field {m['field']:.2e}, a3 {m['a3']:.1e}", flush=True)
+    return rows
+
+
+# --------------------------------------------------------------------------- 4: punch order
+def punch_scene(law, n, steps, gap_file):
+    return cp.Scene(name=f"ti-punch-{law}", geometry={"shape": "surface", "file": gap_file},
+                    indenter={"material": "rigid"},
+                    halfspace={"material": "viscoelastic", "young": E, "poisson": NU,
+                               **LAWS[law][0]},
+                    load={"time": [0.0, 2.0], "normal_force": [1000.0, 1500.0]},
+                    grid={"points": [n, n], "size": [0.8e-3, 0.8e-3]}, time={"steps": steps},
+                    solver={"time_rule": "linear", "tolerance": 1e-10})
+
+
+def punch_rows(quick, folder):
+    n, steps = (16, (10, 20, 40)) if quick else (16, (20, 40, 80, 160))
+    x = -0.4e-3 + (np.arange(n) + 0.5) * 0.8e-3 / n
+    r = np.hypot(*np.meshgrid(x, x, indexing="ij"))
+    gap_file = f"{folder}/punch_{n}.npy"
+    np.save(gap_file, np.where(r <= 0.3e-3, r ** 2 / (2 * R), 0.01))
+    rows = []
+    for law in (("maxwell", "kelvin_voigt") if quick else LAWS):
+        t_min = 0.5 if law == "kelvin_voigt" else 0.25
+        for rule in RULES:
+            if rule == "step_start" and LAWS[law][1].phi0 == 0:
+                continue
+            with use_memory(rule):
+                runs = [cp.simulate(punch_scene(law, n, s, gap_file)).p.values for s in steps]
+            p = [runs[i][::2 ** i] for i in range(len(runs))]
+            t = np.linspace(0.0, 2.0, steps[0] + 1)
+            late = t >= t_min
+            diffs = [float(np.abs(p[i][late] - p[i + 1][late]).max() / p[-1].max())
+                     for i in range(len(p) - 1)]
+            order = (math.log2(diffs[-2] / diffs[-1]) if diffs[-1] > 1e-12 else math.nan)
+            rows.append(dict(part="punch_order", law=law, rule=rule, grid=n,
+                             steps=steps[-1], value=diffs[-1], order=order,
+                             errors=" ".join(f"{e:.2e}" for e in diffs)))
+    return rows
+
+
+# --------------------------------------------------------------------------- output
+def print_tables(rows):
+    print("\n1. Amplification factor of the traction error (largest |g|; (-) when the "
+          "largest is negative; worst negative factor in brackets)")
+    for law in LAWS:
+        for rule in ("step_start", "linear", "bdf2"):
+            cells = []
+            for r in rows:
+                if r["part"] == "amplification" and r["law"] == law and r["rule"] == rule:
+                    if math.isnan(r["value"]):
+                        cells.append("  n/a          ")
+                    else:
+                        sign = "-" if r["signed"] < 0 else " "
+                        cells.append(f"{sign}{r['value']:6.3f} [{r['negative']:5.3f}]")
+            print(f"  {law:13s} {rule:11s} " + " | ".join(cells))
+    for r in rows:
+        if r["part"] == "bound":
+            print(f"  step-start bound, {r['law']:13s}: {r['value']:.6g} s "
+                  f"(2 phi0/phi'(0) = {r['small_step']:.6g} s)")
+    print("\n2. Held displacement (scalar): error at the finest steps and observed order")
+    for r in rows:
+        if r["part"] == "scalar":
+            print(f"  {r['law']:13s} {r['rule']:11s} {r['solves']:4d} solves: errors "
+                  f"{r['errors']}, order {r['order']:.2f}")
+    print("\n4. Pressure field of the rounded punch: successive differences and order")
+    for r in rows:
+        if r["part"] == "punch_order":
+            print(f"  {r['law']:13s} {r['rule']:11s} {r['errors']}  order {r['order']:.2f}")
+
+
+def write_csv(rows, out):
+    keys = sorted({k for r in rows for k in r})
+    path = out / "time_integration.csv"
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: r.get(k, "") for k in keys})
+    print(f"wrote {path}")
+    return path
+
+
+def plot(rows, keep, out):
+    fig, axes = plt.subplots(1, 4, figsize=(19, 4.2))
+    ax = axes[0]
+    hs = np.logspace(-3, 2, 121)
+    for law, style in (("kelvin_voigt", "-"), ("zener100", "--")):
+        creep = LAWS[law][1]
+        for rule, color in (("linear", "tab:red"), ("bdf2", "tab:blue"),
+                            ("step_start", "tab:gray")):
+            if rule == "step_start" and creep.phi0 == 0:
+                continue
+            g = [mem.error_amplification(creep, h, rule) for h in hs]
+            worst = [float(np.real(x[0])) if np.abs(x[0]) > 1e-6 else 0.0 for x in g]
+            ax.plot(hs, worst, style, color=color, label=f"{rule}, {law}")
+    ax.set_xscale("log")
+    ax.set_ylim(-1.5, 1.05)
+    ax.axhline(-1, color="k", lw=0.6)
+    ax.set_xlabel("Δt / τ")
+    ax.set_ylabel("leading amplification factor (real part)")
+    ax.set_title("traction error under held displacement", fontsize=9)
+    ax.legend(fontsize=6.5)
+    if "bdf2" in keep:
+        ax = axes[1]
+        t = keep["bdf2"][1]["t"]
+        for name, color in (("linear", "tab:red"), ("bdf2", "tab:blue")):
+            if name in keep:
+                ax.plot(t[1:], keep[name][1]["pc"][1:] / 1e9, "o-", ms=3, color=color,
+                        label=name)
+        tt = np.linspace(t[1], t[-1], 200)
+        ax.plot(tt, [kelvin_voigt_pressure(0.0, x) / 1e9 for x in tt], "k--", lw=1,
+                label="Lee–Radok")
+        ax.set_ylim(0, 6)
+        ax.set_xlabel("t / τ")
+        ax.set_ylabel("centre pressure [GPa]")
+        ax.set_title("Kelvin–Voigt, step load (issue case)", fontsize=9)
+        ax.legend(fontsize=7)
+        ax = axes[2]
+        for name, color in (("linear", "tab:red"), ("bdf2", "tab:blue")):
+            if name in keep:
+                ds = keep[name][0]
+                k = int(np.argmin(np.abs(ds.time.values - 0.5)))
+                x = ds.x1.values
+                ax.plot(x * 1e3, c.centre_profile(ds.p.values[k]) / 1e9, "o-", ms=2.5,
+                        color=color, label=f"{name}, t = {ds.time.values[k]:.2f} τ")
+        xs = np.linspace(-0.8e-3, 0.8e-3, 400)
+        ax.plot(xs * 1e3, kelvin_voigt_pressure(np.abs(xs), 0.5) / 1e9, "k--", lw=1,
+                label="Lee–Radok")
+        ax.set_ylim(0, 5)
+        ax.set_xlabel("x1 [mm]")
+        ax.set_ylabel("p [GPa]")
+        ax.set_title("Kelvin–Voigt pressure through the centre", fontsize=9)
+        ax.legend(fontsize=7)
+    ax = axes[3]
+    colors = dict(zip(LAWS, ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")))
+    for r in rows:
+        if r["part"] == "punch_order" and r["law"] != "kelvin_voigt":
+            e = [float(v) for v in r["errors"].split()]
+            n = [r["steps"] // 2 ** i for i in range(len(e), 0, -1)]
+            ax.loglog(n, e, {"bdf2": "o-", "linear": "s--", "step_start": "^:"}[r["rule"]],
+                      color=colors[r["law"]], ms=4, label=f"{r['law']}, {r['rule']}")
+    ax.set_xlabel("steps over 2τ (difference to twice the steps)")
+    ax.set_ylabel("max |Δp| / p_max (t ≥ 0.25τ)")
+    ax.set_title("rounded punch: pressure field vs Δt", fontsize=9)
+    ax.legend(fontsize=5.5, ncol=2)
+    fig.tight_layout()
+    return c.save_figure(fig, out / "time_integration.png")
+
+
+def main(argv=None):
+    p = c.parser(__doc__.splitlines()[0], __doc__)
+    args = p.parse_args(argv)
+    out = c.out_dir(args)
+    rows = amplification_rows()
+    rows += scalar_rows(steps=(10, 20, 40), reference=320) if args.quick else scalar_rows()
+    print("\n3. Lee-Radok step load (cp.simulate)")
+    keep = {}
+    with scene_accepts("auto", "bdf2"), tempfile.TemporaryDirectory() as folder:
+        rows += lee_radok_rows(args.quick, keep)
+        rows += punch_rows(args.quick, folder)
+    print_tables(rows)
+    csv_path = write_csv(rows, out)
+    png = plot(rows, keep, out)
+    return {"csv": csv_path, "png": png, "rows": rows}
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
