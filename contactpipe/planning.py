@@ -58,7 +58,7 @@ class Plan:
     tangential: str = "none"
     coupling: str = "none"
     memory: str = "none"
-    time_rule: str = "linear"
+    time_rule: str = "auto"
     preload: str = "frictional"
 
     def describe(self) -> str:

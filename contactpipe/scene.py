@@ -41,6 +41,7 @@ import numpy as np
 import tomli_w
 
 from . import geometry as _geometry
+from . import materials
 from .exceptions import SceneError
 from .files import loads_toml
 from .scene_parts import (MAX_STEPS, MATERIALS, SHAPES, BodySpec, Fretting, Friction,
@@ -173,6 +174,7 @@ def _check_scene(p: dict, problems: list):
         _check_sliding(p, problems)
         _check_tables(p, problems)
         time = _resolve_time(p, problems)
+        _check_step_start_stability(p, time, problems)
         _check_grid(p, problems)
     return time
 
@@ -191,7 +193,33 @@ def _check_bodies(p, problems):
                 problems.append(
                     f"solver.time_rule = 'step_start' with {side}.creep = {spec.creep!r}"
                     f" (phi(0) = 0, no instantaneous elasticity): the step-start rule "
-                    f"gives a rigid response. Use time_rule = \"linear\"")
+                    f"gives a rigid response. Use time_rule = \"auto\"")
+
+
+def _check_step_start_stability(p, time, problems):
+    """The step-start rule is explicit: refuse a time step at or above its stability bound
+    (materials.step_start_stable_step), naming the bound and the steps that keep below it."""
+    load, solver = p["load"], p["solver"]
+    if (load is None or time is None or not time.steps or solver is None
+            or solver.time_rule != "step_start"):
+        return
+    window = load.window
+    dt = window / time.steps
+    for side in ("indenter", "halfspace"):
+        spec = p[side]
+        if spec is None or spec.material != "viscoelastic":
+            continue
+        creep = spec.creep_function()
+        if creep.phi0 == 0:
+            continue                      # refused above with its own message
+        bound = materials.step_start_stable_step(creep)
+        if dt >= bound:
+            steps = math.floor(window / bound) + 1
+            problems.append(
+                f"solver.time_rule = 'step_start' is unstable for {side}.creep = "
+                f"{spec.creep!r}: the time step {dt:.6g} s is not below its stability "
+                f"bound {bound:.6g} s (the error grows every step); take time.steps >= "
+                f"{steps} or solver.time_rule = \"auto\"")
 
 
 def _check_sliding(p, problems):

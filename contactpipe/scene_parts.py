@@ -35,7 +35,7 @@ SHAPES = ("sphere", "ellipsoid", "flat_punch", "surface")
 MATERIALS = ("rigid", "elastic", "viscoelastic")
 CREEP_MODELS = ("maxwell", "kelvin_voigt", "zener", "prony", "tabulated")
 PRELOADS = ("frictional", "frictionless")
-TIME_RULES = ("linear", "step_start")
+TIME_RULES = ("auto", "bdf2", "linear", "step_start")
 TANGENTIAL_MODELS = ("auto", "scalar", "vector")
 FFT_BACKENDS = ("auto", "pyfftw", "scipy")
 ACCURACIES = ("fast", "balanced", "accurate")
@@ -722,9 +722,15 @@ class Solver(Part):
         Relative tolerance on the force balance and complementarity, in (0, 1e-2].
     max_iterations : int
         Iteration cap of each inner solve, >= 1.
-    time_rule : {"linear", "step_start"}
-        Traction within a time step in the viscoelastic history: linear (second order)
-        or applied at the step start (the paper's rectangle rule; not for phi(0) = 0).
+    time_rule : {"auto", "bdf2", "linear", "step_start"}
+        Time integration of the viscoelastic history (docs/time-integration.md):
+        "bdf2" (exponentially fitted BDF2 on the internal variables: L-stable, second
+        order, for every creep law and step), "linear" (traction linear within a step:
+        second order, but its error alternates and barely decays for creep laws with
+        little instantaneous elasticity), "auto" (the default: "linear" where its error
+        keeps its sign for the body's creep law and step, "bdf2" elsewhere), or
+        "step_start" (the paper's rule, first order and explicit: refused above its
+        stability bound and for phi(0) = 0).
     tangential : {"auto", "scalar", "vector"}
         Tangential model: chosen from the scene, q2 = 0 (Cattaneo-Mindlin), or both.
     max_coupling_passes : int
@@ -742,7 +748,7 @@ class Solver(Part):
 
     tolerance: float = 1e-9
     max_iterations: int = 2000
-    time_rule: str = "linear"
+    time_rule: str = "auto"
     tangential: str = "auto"
     max_coupling_passes: int = 100
     preload_substeps: int = 8
@@ -755,7 +761,7 @@ class Solver(Part):
         Field("tolerance", "number", f"a number in (0, {MAX_TOLERANCE:g}]",
               ok=lambda x: 0 < x <= MAX_TOLERANCE, default=1e-9, unit="1"),
         Field("max_iterations", "integer", _AT_LEAST_1, ok=_at_least_1, default=2000),
-        Field("time_rule", "choice", options=TIME_RULES, default="linear"),
+        Field("time_rule", "choice", options=TIME_RULES, default="auto"),
         Field("tangential", "choice", options=TANGENTIAL_MODELS, default="auto"),
         Field("max_coupling_passes", "integer", _AT_LEAST_1, ok=_at_least_1, default=100),
         Field("preload_substeps", "integer", _AT_LEAST_1, ok=_at_least_1, default=8,

@@ -337,7 +337,6 @@ def case_kelvin_voigt(nu, window=10.0, n=32, steps=20):
                                 size="auto", name=f"ext-kelvin-voigt-nu-{nu:g}-w{window:g}")
 
     def check(ds, scene):
-        t = ds.time.values
         ok, txt, err = lee_radok_check(ds, c.E_GLASSY, nu, kv_creep(1.0), 0.05,
                                        t_min=0.2 * window)
         return ok, "Lee-Radok a^3 within 5 % for t ≥ 0.2τ", txt, {"a3": err}

@@ -57,7 +57,6 @@ import numpy as np
 import matplotlib.pyplot as plt
 
 import contactpipe as cp
-import contactpipe.scene as scene_module
 import contactpipe.simulation as simulation_module
 from contactpipe import analytic as an
 from contactpipe.materials import kelvin_voigt, maxwell, prony, step_start_stable_step, zener
@@ -77,19 +76,6 @@ LAWS = {
 }
 RULES = ("bdf2", "linear", "step_start")
 CANDIDATES = ("auto", "bdf2", "bdf2_plain", "bdf2_1start", "linear", "linear_ds", "step_start")
-
-
-@contextlib.contextmanager
-def scene_accepts(*names):
-    """Within the block the scene accepts ``solver.time_rule`` = each of ``names`` (issue 9,
-    phase 2 adds "auto" and "bdf2" to the scene's list; until then the studies widen it
-    for their runs, and restore it after)."""
-    old = scene_module.TIME_RULES
-    scene_module.TIME_RULES = tuple(old) + tuple(n for n in names if n not in old)
-    try:
-        yield
-    finally:
-        scene_module.TIME_RULES = old
 
 
 # --------------------------------------------------------------------------- candidates
@@ -477,7 +463,7 @@ def main(argv=None):
     rows += scalar_rows(steps=(10, 20, 40), reference=320) if args.quick else scalar_rows()
     print("\n3. Lee-Radok step load (cp.simulate)")
     keep = {}
-    with scene_accepts("auto", "bdf2"), tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory() as folder:
         rows += lee_radok_rows(args.quick, keep)
         rows += punch_rows(args.quick, folder)
     print_tables(rows)

@@ -93,7 +93,7 @@ MISTAKES = [
     ("unknown preload", {"load.preload": "none"},
      r"load\.preload must be one of 'frictional', 'frictionless', got 'none'"),
     ("unknown time_rule", {"solver.time_rule": "trapezoid"},
-     r"solver\.time_rule must be one of 'linear', 'step_start', got 'trapezoid'"),
+     r"solver\.time_rule must be one of 'auto', 'bdf2', 'linear', 'step_start', got 'trapezoid'"),
     ("unknown tangential model", {"solver.tangential": "2d"},
      r"solver\.tangential must be one of 'auto', 'scalar', 'vector'"),
     ("unknown fft", {"solver.fft": "numpy"}, r"solver\.fft must be one of 'auto', 'pyfftw'"),
@@ -259,7 +259,15 @@ MISTAKES = [
                                                     "retardation_time": 1.0}},
      r"solver\.time_rule = 'step_start' with halfspace\.creep = 'kelvin_voigt' \(phi\(0\) = "
      r"0, no instantaneous elasticity\): the step-start rule gives a rigid response\. Use "
-     r"time_rule = \"linear\""),
+     r"time_rule = \"auto\""),
+    # the paper's step-start rule is explicit: Maxwell t' = 0.5 s is stable for steps
+    # below 2 t' = 1 s; the scene's window of 1 s in 1 step is at the bound (issue 9)
+    ("step_start above its stability bound",
+     {"solver.time_rule": "step_start", "time.steps": 1,
+      "halfspace": {**VE, "creep": "maxwell", "relaxation_time": 0.5}},
+     r"^solver\.time_rule = 'step_start' is unstable for halfspace\.creep = 'maxwell': the "
+     r"time step 1 s is not below its stability bound 1 s \(the error grows every step\); "
+     r"take time\.steps >= 2 or solver\.time_rule = \"auto\"$"),
     ("creep table shorter than the window", {"halfspace": {**VE, "creep": "tabulated",
                                                           "table": [[0, 1.0], [0.5, 2.0]]}},
      r"^halfspace\.table ends at t = 0\.5 s, before the end of the load window \(load\.time "

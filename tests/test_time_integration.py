@@ -44,16 +44,6 @@ CREEPS["burgers"] = prony([[3.0, 1.0]], 0.5)
 CREEPS["zener1e4"] = zener(1e4, 1.0, 1.0)
 
 
-@pytest.fixture(autouse=True)
-def scene_accepts_new_rules(monkeypatch):
-    """solver.time_rule = "auto" / "bdf2" reach simulate() through the scene; until the
-    scene lists them (issue 9, phase 2) the tests add them to the names it accepts."""
-    import contactpipe.scene as scene_module
-    extra = tuple(r for r in ("auto", "bdf2") if r not in scene_module.TIME_RULES)
-    if extra:
-        monkeypatch.setattr(scene_module, "TIME_RULES", scene_module.TIME_RULES + extra)
-
-
 # --------------------------------------------------------------------------- helpers
 def lee_radok_scene(law, n, steps, size="auto", rule="auto", ramp=None):
     keys = LAWS[law][0]
