@@ -48,6 +48,7 @@ import os
 import pathlib
 import warnings
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -57,8 +58,8 @@ from .exceptions import ArchiveError
 from .files import atomic_path, loads_toml
 from .solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
 
-__all__ = ["subsurface_stress", "save_stress", "open_stress", "body_poisson", "BODIES",
-           "STRESS_VARIABLES", "check_request"]
+__all__ = ["subsurface_stress", "save_stress", "open_stress", "is_stress_file", "body_poisson",
+           "BODIES", "STRESS_VARIABLES", "check_request"]
 
 BODIES = ("halfspace", "indenter")
 #: Variables of a stress dataset: long names (all in Pa).
@@ -458,3 +459,20 @@ def open_stress(path, chunks=None) -> xr.Dataset:
         raise ArchiveError(f"{path}: not a complete stress file"
                            + (f" (missing {', '.join(missing)})" if missing else ""))
     return st
+
+
+def is_stress_file(path) -> bool:
+    """True when ``path`` is a netCDF file holding a stress field (the variables of
+    :data:`STRESS_VARIABLES` and a dimension ``x3``), as :func:`save_stress` writes.
+
+    Reads the metadata only and never raises: a missing, unreadable or foreign file is
+    not a stress file (opening it says why).
+    """
+    try:
+        nc = netCDF4.Dataset(path, mode="r")
+    except Exception:                     # noqa: BLE001 - not netCDF, missing: not stress
+        return False
+    try:
+        return "x3" in nc.dimensions and all(v in nc.variables for v in STRESS_VARIABLES)
+    finally:
+        nc.close()

@@ -26,7 +26,7 @@ from ..archive import open_archive
 from ..exceptions import ArchiveError, ContactpipeError, one_line
 from ..files import check_output_path
 from ..stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
-from .plot_stress import plot_stress, save_figure
+from .plot import plot_stress, save_figure
 
 __all__ = ["add_arguments", "main", "parse_depths", "parse_time"]
 
