@@ -260,10 +260,13 @@ def test_stress_product_computed_once_then_when_its_inputs_change(tmp_path, monk
     nz, peak = rerun(stronger)
     assert nz == 4 and peak < rec["criterion_maximum"]
     rerun(stronger, expect_written=False)
+    # the cycle in t_norm of the archive (0 to 1 s here): other settings, the same instants
+    in_t_norm = stronger.replace("cycle = ", "cycle_norm = ")
+    assert rerun(in_t_norm) == (nz, peak)
     # the archive is newer than its product: recomputed
     later = max(v[1] for v in stamps(out).values()) + 1_000_000_000
     os.utime(archive, ns=(later, later))
-    rerun(stronger)
+    rerun(in_t_norm)
 
     # a product that cannot be made is a failure of that member's stress stage
     make_study(tmp_path, forces=(1000.0,), figures=[], reference="none",
@@ -291,6 +294,12 @@ def test_stress_product_computed_once_then_when_its_inputs_change(tmp_path, monk
     ("depths = [0.0]\ntime = \"al\"\ncycle = [1.0, 0.0]\n",
      ["stress.time must be 'last', 'all' or a list of times [s]",
       "stress.cycle = [1.0, 0.0]: t_start must be < t_end"]),
+    ("depths = [0.0]\ntime = \"all\"\ncriterion = \"amplitude\"\ncycle = [0.0, 1.0]\n"
+     "cycle_norm = [0.0, 1.5]\n",
+     ["stress.cycle_norm must be [a, b], 0 <= a < b <= 1",
+      "stress.cycle and stress.cycle_norm cannot both be given"]),
+    ("depths = [0.0]\ncycle_norm = [0.2, 1.0]\n",
+     ["stress.cycle_norm = [0.2, 1.0] is not used without a criterion"]),
 ])
 def test_bad_stress_table_exit_2(tmp_path, capsys, table, parts):
     path = make_study(tmp_path, forces=(1000.0,), figures=[], reference="none",

@@ -38,7 +38,8 @@ Pipeline file::
     criterion = "crossland"        # none | amplitude | crossland | dang_van | swt
     torsion_limit = 400e6          # the criterion's constants [Pa]
     bending_limit = 600e6
-    cycle = [0.2, 1.0]             # s: the instants the criterion runs over (default all)
+    cycle = [0.2, 1.0]             # s: the instants the criterion runs over (default all);
+                                   # or cycle_norm = [0.2, 1.0], in t_norm of each member
     [dask]                         # overrides the sweep file's [dask]
     scheduler = ""
 """
@@ -160,6 +161,10 @@ STRESS_FIELDS = (
           "criterion runs over", length=2, unit="s",
           check=lambda v, key: None if v[0] < v[1] else f"{key} = {list(v)}: t_start must "
                                                         "be < t_end"),
+    Field("cycle_norm", "numbers", "[a, b], 0 <= a < b <= 1: the instants with a <= t_norm "
+          "<= b, t_norm = (t - t_first)/(t_last - t_first) over the member's archive",
+          ok=lambda x: 0 <= x <= 1, length=2, unit="1",
+          check=lambda v, key: None if v[0] < v[1] else f"{key} = {list(v)}: a must be < b"),
     Field("precision", "choice", options=("float64", "float32"), default="float64"),
     Field("figure", "bool", default=True),
 ) + CONSTANT_FIELDS
@@ -192,6 +197,9 @@ class StressSpec:
         The criterion's constants as given, sorted by name.
     cycle : tuple of float or None
         (t_start, t_end) [s]: the instants the criterion runs over; None: all.
+    cycle_norm : tuple of float or None
+        (a, b): the same in t_norm = (t - t_first)/(t_last - t_first) of the member's
+        archive (the sweep's t_norm), for members whose windows differ.
     precision : str
         Storage type of the stresses.
     figure : bool
@@ -204,6 +212,7 @@ class StressSpec:
     criterion: str | None = None
     constants: tuple = ()
     cycle: tuple | None = None
+    cycle_norm: tuple | None = None
     precision: str = "float64"
     figure: bool = True
 
@@ -214,6 +223,7 @@ class StressSpec:
                 "time": self.time if isinstance(self.time, str) else list(self.time),
                 "criterion": self.criterion, "constants": dict(self.constants),
                 "cycle": None if self.cycle is None else list(self.cycle),
+                "cycle_norm": None if self.cycle_norm is None else list(self.cycle_norm),
                 "precision": self.precision}
 
     def digest(self) -> str:
@@ -557,7 +567,8 @@ def read_stress_table(raw, problems: list) -> StressSpec | None:
     r.check_keys(STRESS_FIELDS)
     depths = _read_depths(r)
     values = r.read([f for f in STRESS_FIELDS if f.name in
-                     ("body", "time", "criterion", "cycle", "precision", "figure")])
+                     ("body", "time", "criterion", "cycle", "cycle_norm", "precision",
+                      "figure")])
     criterion = None if values["criterion"] in (None, "none") else values["criterion"]
     if values["criterion"] is None:           # refused above: its constants are unknown
         return None
@@ -565,17 +576,22 @@ def read_stress_table(raw, problems: list) -> StressSpec | None:
     time = values["time"]
     if criterion is None:
         r.forbid("cycle", "without a criterion")
-    elif time == "last" or (isinstance(time, tuple) and len(set(time)) < 2):
-        r.add(f"stress.criterion = {criterion!r} needs the stress over a cycle: give "
-              f"stress.time = \"all\" or a list of at least 2 times [s], got "
-              f"{time if isinstance(time, str) else list(time)!r}")
+        r.forbid("cycle_norm", "without a criterion")
+    else:
+        if r.has("cycle") and r.has("cycle_norm"):
+            r.add("stress.cycle and stress.cycle_norm cannot both be given; keep one")
+        if time == "last" or (isinstance(time, tuple) and len(set(time)) < 2):
+            r.add(f"stress.criterion = {criterion!r} needs the stress over a cycle: give "
+                  f"stress.time = \"all\" or a list of at least 2 times [s], got "
+                  f"{time if isinstance(time, str) else list(time)!r}")
     if len(problems) > before:
         return None
     if isinstance(time, tuple):
         time = tuple(float(t) for t in np.unique(time))
     return StressSpec(depths=depths, body=values["body"], time=time, criterion=criterion,
                       constants=constants, cycle=values["cycle"],
-                      precision=values["precision"], figure=values["figure"])
+                      cycle_norm=values["cycle_norm"], precision=values["precision"],
+                      figure=values["figure"])
 
 
 def read_pipeline_file(path) -> PipelineSpec:

@@ -169,28 +169,31 @@ def _peak(st) -> dict:
 
 
 def _cycle(st, cycle):
-    """The instants of ``st`` within ``cycle`` = (t_start, t_end) [s] (all when None)."""
+    """The instants of ``st`` within ``cycle`` = (t_start, t_end) [s] (all when None);
+    ValueError when fewer than 2."""
     t = np.asarray(st["time"].values, float)
     if cycle is not None:
         tol = 1e-9 * max(float(np.ptp(t)), abs(float(t[-1])), 1e-300)
         st = st.isel(time=np.flatnonzero((t >= cycle[0] - tol) & (t <= cycle[1] + tol)))
     n = st.sizes["time"]
     if n < 2:
-        where = "" if cycle is None else f"stress.cycle = {list(cycle)} s holds "
+        where = "" if cycle is None else \
+            f"the cycle [{cycle[0]:g} s, {cycle[1]:g} s] holds "
         raise ValueError(f"{where}{n} of the {t.size} instant(s) computed ({t[0]:g} s to "
                          f"{t[-1]:g} s): a fatigue criterion needs at least 2 instants of "
                          "the cycle")
     return st
 
 
-def _finish(tmp: pathlib.Path, spec: StressSpec) -> None:
+def _finish(tmp: pathlib.Path, spec: StressSpec, cycle) -> None:
     """Add to the stress file ``tmp`` its von Mises peak and, with a criterion, the
-    criterion's fields over (x3, x1, x2), read back one depth at a time."""
+    criterion's fields over (x3, x1, x2) over the instants of ``cycle`` (t_start, t_end)
+    [s] (None: all), read back one depth at a time."""
     with open_stress(tmp, chunks={"time": -1, "x3": 1}) as st:
         attrs = _peak(st)
         fields = None
         if spec.criterion is not None:
-            fi = fatigue(_cycle(st, spec.cycle), spec.criterion, **dict(spec.constants))
+            fi = fatigue(_cycle(st, cycle), spec.criterion, **dict(spec.constants))
             attrs.update({k: fi.attrs[k] for k in ("criterion", "criterion_field",
                                                    "constants", "cycle")})
             fields = fi.drop_vars(list(fi.coords))
@@ -208,7 +211,8 @@ def write_stress_product(archive, target, spec: StressSpec) -> dict:
     The stress over (time, x3, x1, x2) (:func:`contactpipe.subsurface_stress`, streamed
     block by block from the lazily opened archive: bounded memory) and, when ``spec``
     names a criterion, its fields over (x3, x1, x2) (:func:`contactpipe.fatigue` over the
-    instants of ``spec.cycle``, read back one depth at a time) in one netCDF file,
+    instants of ``spec.cycle`` or ``spec.cycle_norm``, read back one depth at a time) in
+    one netCDF file,
     written atomically, with the attributes :data:`SETTINGS_ATTR` (the settings as
     JSON), :data:`DIGEST_ATTR` (their digest) and the largest von Mises stress and where
     it is. The work runs on dask's synchronous scheduler: one block in memory at a time,
@@ -235,9 +239,13 @@ def write_stress_product(archive, target, spec: StressSpec) -> dict:
         st = subsurface_stress(ds, list(spec.depths), body=spec.body, time=time)
         st.attrs[SETTINGS_ATTR] = json.dumps(spec.settings(), sort_keys=True)
         st.attrs[DIGEST_ATTR] = spec.digest()
+        cycle = spec.cycle
+        if spec.cycle_norm is not None:            # t_norm of the archive -> seconds
+            t = np.asarray(ds["time"].values, float)
+            cycle = tuple(float(t[0] + f * (t[-1] - t[0])) for f in spec.cycle_norm)
         with atomic_path(target) as tmp:
             save_stress(st, tmp, precision=spec.precision)
-            _finish(tmp, spec)
+            _finish(tmp, spec, cycle)
     return product_record(target)
 
 
