@@ -22,11 +22,13 @@ fatigue criterion, the criterion's fields in one file, with the settings that ma
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import pathlib
 import sys
 
 import dask
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -47,6 +49,10 @@ DIGEST_ATTR = "stress_settings_digest"
 #: Attributes of the largest von Mises stress of a product and where it is.
 PEAK_ATTRS = ("von_mises_max", "von_mises_max_time", "von_mises_max_x3",
               "von_mises_max_x1", "von_mises_max_x2")
+#: HDF5 chunk cache per variable of the files the product opens [bytes]: every chunk is
+#: read once, so a small cache loses nothing (the default, up to 64 MiB per variable,
+#: would add up to 7 x 64 MiB reading a stress file back).
+CHUNK_CACHE_BYTES = 4 * 2 ** 20
 
 
 def parse_depths(text: str) -> list[float]:
@@ -156,6 +162,18 @@ def _summary(path) -> str:
 
 # --------------------------------------------------------------------------- the pipeline's product
 
+@contextlib.contextmanager
+def _small_chunk_cache():
+    """netCDF's default chunk cache, for the files opened meanwhile, set to
+    :data:`CHUNK_CACHE_BYTES` per variable (a process-wide setting, put back after)."""
+    size, nelems, preemption = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(CHUNK_CACHE_BYTES, nelems, preemption)
+    try:
+        yield
+    finally:
+        netCDF4.set_chunk_cache(size, nelems, preemption)
+
+
 def _peak(st) -> dict:
     """The largest von Mises stress [Pa] of a stress file and where it is (time [s],
     x3, x1, x2 [m]), read block by block."""
@@ -215,8 +233,11 @@ def write_stress_product(archive, target, spec: StressSpec) -> dict:
     one netCDF file,
     written atomically, with the attributes :data:`SETTINGS_ATTR` (the settings as
     JSON), :data:`DIGEST_ATTR` (their digest) and the largest von Mises stress and where
-    it is. The work runs on dask's synchronous scheduler: one block in memory at a time,
-    and never on a distributed client the process may hold.
+    it is. The work runs on dask's synchronous scheduler (one block in memory at a time,
+    and never on a distributed client the process may hold), with small HDF5 chunk caches
+    (:data:`CHUNK_CACHE_BYTES`): the memory is about one block of
+    :data:`contactpipe.stress.BLOCK_BYTES` and one depth of the criterion's history,
+    whatever the size of the archive.
 
     Returns
     -------
@@ -235,7 +256,8 @@ def write_stress_product(archive, target, spec: StressSpec) -> dict:
     time = {"last": None, "all": "all"}[spec.time] if isinstance(spec.time, str) else \
         list(spec.time)
     target.parent.mkdir(parents=True, exist_ok=True)
-    with dask.config.set(scheduler="synchronous"), open_archive(archive) as ds:
+    with dask.config.set(scheduler="synchronous"), _small_chunk_cache(), \
+            open_archive(archive) as ds:
         st = subsurface_stress(ds, list(spec.depths), body=spec.body, time=time)
         st.attrs[SETTINGS_ATTR] = json.dumps(spec.settings(), sort_keys=True)
         st.attrs[DIGEST_ATTR] = spec.digest()
