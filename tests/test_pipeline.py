@@ -310,3 +310,20 @@ def test_bad_stress_table_exit_2(tmp_path, capsys, table, parts):
     for part in parts:
         assert part in err, (part, err)
     assert not (tmp_path / "runs").exists()                  # nothing run, nothing written
+
+
+def test_the_examples_stress_table_reads(tmp_path):
+    """examples/pipeline.toml's commented-out [stress] block, uncommented, is valid: 13
+    depths to 0.6 mm, Crossland over t_norm 0.2 to 1 (the default main job leaves it out)."""
+    examples = pathlib.Path(__file__).resolve().parents[1] / "examples"
+    for name in ("sweep.toml", "paper-maxwell.toml"):
+        (tmp_path / name).write_text((examples / name).read_text())
+    text = (examples / "pipeline.toml").read_text()
+    assert read_pipeline_file(examples / "pipeline.toml").stress is None
+    lines = text.splitlines()
+    start = lines.index("# [stress]")
+    block = [ln[2:] for ln in lines[start:] if ln.startswith("# ")]
+    (tmp_path / "pipeline.toml").write_text("\n".join(lines[:start] + block) + "\n")
+    spec = read_pipeline_file(tmp_path / "pipeline.toml").stress
+    assert len(spec.depths) == 13 and spec.depths[-1] == pytest.approx(6e-4)
+    assert spec.criterion == "crossland" and spec.cycle_norm == (0.2, 1.0)
