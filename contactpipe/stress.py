@@ -48,6 +48,7 @@ import os
 import pathlib
 import warnings
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -57,8 +58,8 @@ from .exceptions import ArchiveError
 from .files import atomic_path, loads_toml
 from .solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
 
-__all__ = ["subsurface_stress", "save_stress", "open_stress", "body_poisson", "BODIES",
-           "STRESS_VARIABLES", "check_request"]
+__all__ = ["subsurface_stress", "save_stress", "open_stress", "is_stress_file", "body_poisson",
+           "BODIES", "STRESS_VARIABLES", "check_request"]
 
 BODIES = ("halfspace", "indenter")
 #: Variables of a stress dataset: long names (all in Pa).
@@ -384,6 +385,40 @@ def _dataset(sel, depths, data, body, nu, attrs, source) -> xr.Dataset:
     return out
 
 
+def _write_streamed(st: xr.Dataset, tmp, encoding) -> None:
+    """Write a lazy stress dataset block by block: the coordinates and attributes first
+    (xarray), then the fields one (instants x depths) block at a time, its seven
+    variables computed together (one computation of the block) and written before the
+    next block is computed, so that one block is in memory at a time whatever order a
+    dask scheduler would choose."""
+    fields = list(STRESS_VARIABLES)
+    st.drop_vars(fields).to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4")
+    tchunks, zchunks = st["s11"].chunks[:2]
+    with netCDF4.Dataset(tmp, mode="a") as nc:
+        for v in fields:
+            e = encoding[v]
+            var = nc.createVariable(v, e["dtype"], FIELD_DIMS, zlib=e["zlib"],
+                                    complevel=e.get("complevel", 4),
+                                    shuffle=e.get("shuffle", False),
+                                    chunksizes=e["chunksizes"], fill_value=False)
+            var.setncatts(st[v].attrs)
+            # whole chunks are written once: a cache of one chunk, not HDF5's default of
+            # up to 64 MiB per variable, which would grow with the file to 7 x 64 MiB
+            var.set_var_chunk_cache(size=int(np.prod(e["chunksizes"])) * var.dtype.itemsize,
+                                    nelems=1, preemption=1.0)
+        t0 = 0
+        for nt in tchunks:
+            z0 = 0
+            for nz in zchunks:
+                block = st[fields].isel(time=slice(t0, t0 + nt), x3=slice(z0, z0 + nz))
+                block = block.compute()
+                for v in fields:
+                    nc[v][t0:t0 + nt, z0:z0 + nz] = block[v].values
+                del block
+                z0 += nz
+            t0 += nt
+
+
 def save_stress(st: xr.Dataset, path, precision: str = "float64",
                 compress: bool = True) -> pathlib.Path:
     """Write a stress dataset to netCDF atomically (a lazy one is streamed block by block).
@@ -426,8 +461,11 @@ def save_stress(st: xr.Dataset, path, precision: str = "float64",
     path.parent.mkdir(parents=True, exist_ok=True)
     try:
         with atomic_path(path) as tmp:
-            st.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4",
-                         encoding=encoding)
+            if st["s11"].chunks is None:
+                st.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4",
+                             encoding=encoding)
+            else:
+                _write_streamed(st, tmp, encoding)
     except (ArchiveError, ValueError):
         raise
     except Exception as err:               # noqa: BLE001 - HDF/netCDF errors of every kind
@@ -458,3 +496,20 @@ def open_stress(path, chunks=None) -> xr.Dataset:
         raise ArchiveError(f"{path}: not a complete stress file"
                            + (f" (missing {', '.join(missing)})" if missing else ""))
     return st
+
+
+def is_stress_file(path) -> bool:
+    """True when ``path`` is a netCDF file holding a stress field (the variables of
+    :data:`STRESS_VARIABLES` and a dimension ``x3``), as :func:`save_stress` writes.
+
+    Reads the metadata only and never raises: a missing, unreadable or foreign file is
+    not a stress file (opening it says why).
+    """
+    try:
+        nc = netCDF4.Dataset(path, mode="r")
+    except Exception:                     # noqa: BLE001 - not netCDF, missing: not stress
+        return False
+    try:
+        return "x3" in nc.dimensions and all(v in nc.variables for v in STRESS_VARIABLES)
+    finally:
+        nc.close()

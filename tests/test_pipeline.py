@@ -1,5 +1,5 @@
-"""Batch pipeline: sweep -> compare -> plot; idempotent (mtimes), cron lock (exit 3),
-failures reported (exit 1), bad files (exit 2)."""
+"""Batch pipeline: sweep -> compare -> plot -> stress; idempotent (mtimes, and the stress
+settings' digest), cron lock (exit 3), failures reported (exit 1), bad files (exit 2)."""
 import fcntl
 import importlib
 import json
@@ -7,18 +7,23 @@ import os
 import pathlib
 import textwrap
 
+import numpy as np
 import pytest
 
+import contactpipe as cp
 from contactpipe.pipeline import cli
 from contactpipe.pipeline.config import read_pipeline_file
 from contactpipe.pipeline.run import PipelineLockedError, run_pipeline
+from contactpipe.stress import open_stress
 from contactpipe.testing import TINY_SCENES
 
 CREEP = TINY_SCENES["creep"]
 
 
-def make_study(root: pathlib.Path, forces=(500.0, 1000.0), figures=None, reference=None):
-    """scenes/creep.toml, sweep.toml and pipeline.toml under ``root``."""
+def make_study(root: pathlib.Path, forces=(500.0, 1000.0), figures=None, reference=None,
+               stress=None):
+    """scenes/creep.toml, sweep.toml and pipeline.toml under ``root``; ``stress``: the
+    body of a [stress] table (TOML text)."""
     (root / "scenes").mkdir(parents=True, exist_ok=True)
     (root / "scenes" / "creep.toml").write_text(CREEP)
     (root / "sweep.toml").write_text(textwrap.dedent(f"""
@@ -31,6 +36,8 @@ def make_study(root: pathlib.Path, forces=(500.0, 1000.0), figures=None, referen
         extra += f'[compare]\nreference = "{reference}"\n'
     if figures is not None:
         extra += f"[plot]\nfigures = {json.dumps(list(figures))}\n"
+    if stress is not None:
+        extra += "[stress]\n" + textwrap.dedent(stress)
     path = root / "pipeline.toml"
     path.write_text(textwrap.dedent("""
         name = "demo"
@@ -177,3 +184,146 @@ def test_bad_pipeline_file_exit_2(tmp_path, capsys):
         assert part in err
     with pytest.raises(Exception, match="no such sweep file"):
         read_pipeline_file(path)
+
+
+# --------------------------------------------------------------------------- [stress]
+
+STRESS = """
+    depths = {max = 1.5e-4, count = 3}
+    time = "all"
+    criterion = "crossland"
+    torsion_limit = 400e6
+    bending_limit = 600e6
+    cycle = [0.2, 1.0]
+"""
+
+
+def test_stress_product_computed_once_then_when_its_inputs_change(tmp_path, monkeypatch):
+    """The [stress] product of a member (stress and Crossland in one file, and its
+    figure): written once and equal to the API's result; nothing redone on a second run;
+    redone when the settings (depths, a constant) change or the archive is newer; a
+    member whose product fails is reported (stage "stress", exit 1), the others land."""
+    path = make_study(tmp_path, forces=(1000.0,), figures=[], reference="none",
+                      stress=STRESS)
+    out = tmp_path / "runs" / "demo"
+    first = run_pipeline(path, progress=False)
+    assert first.ok, first.failed
+    digest = first.sweep.members[0].digest
+    archive, product = out / f"{digest}.nc", out / "stress" / f"{digest}.nc"
+    figure = out / "figures" / f"{digest}-stress.png"
+    assert sorted(map(str, first.written)) == sorted([str(product), str(figure)])
+    assert figure.stat().st_size > 5_000
+    depths = [0.0, 7.5e-5, 1.5e-4]
+    ref = cp.subsurface_stress(cp.open_archive(archive), depths, time="all").load()
+    cross = cp.fatigue(ref.sel(time=slice(0.2, 1.0)), "crossland", torsion_limit=400e6,
+                       bending_limit=600e6)
+    with open_stress(product) as st:
+        assert st.sizes == {"time": 11, "x3": 3, "x1": 24, "x2": 24}
+        assert np.allclose(st["von_mises"].values, ref["von_mises"].values, rtol=1e-12,
+                           atol=0)
+        assert np.allclose(st["crossland_index"].values, cross["crossland_index"].values,
+                           rtol=1e-9, atol=0)
+        assert st.attrs["criterion"] == "crossland" and "9 instants" in st.attrs["cycle"]
+    rec = json.loads((out / "summary.json").read_text())["members"][0]["stress"]
+    assert rec["status"] == "written" and rec["figure"] == str(figure)
+    assert rec["criterion_maximum"] == pytest.approx(float(cross["maximum"]), rel=1e-9)
+    assert rec["von_mises_max"] == pytest.approx(float(ref["von_mises"].max()), rel=1e-12)
+    before = stamps(out)
+
+    # nothing changed: no stress work, nothing rewritten
+    stress_cmd = importlib.import_module("contactpipe.pipeline.stress_cmd")
+    plot = importlib.import_module("contactpipe.pipeline.plot")
+    forbid(monkeypatch, stress_cmd, "write_stress_product")
+    forbid(monkeypatch, plot, "plot_stress")
+    second = run_pipeline(path, progress=False)
+    assert second.ok and not second.written and len(second.up_to_date) == 2
+    assert stamps(out) == before
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["members"][0]["stress"]["status"] == "up to date"
+    assert summary["stress"]["settings"]["depths"] == depths
+    monkeypatch.undo()
+
+    def rerun(stress_table, expect_written=True):
+        make_study(tmp_path, forces=(1000.0,), figures=[], reference="none",
+                   stress=stress_table)
+        res = run_pipeline(path, progress=False)
+        assert res.ok, res.failed
+        assert not res.computed                                   # the archive is kept
+        assert sorted(map(str, res.written)) == \
+            (sorted([str(product), str(figure)]) if expect_written else [])
+        with open_stress(product) as st:
+            return st.sizes["x3"], float(st["maximum"].values)
+
+    # other depths, then another constant: recomputed; back to the same: kept
+    assert rerun(STRESS.replace("count = 3", "count = 4"))[0] == 4
+    stronger = STRESS.replace("count = 3", "count = 4").replace("400e6", "450e6")
+    nz, peak = rerun(stronger)
+    assert nz == 4 and peak < rec["criterion_maximum"]
+    rerun(stronger, expect_written=False)
+    # the cycle in t_norm of the archive (0 to 1 s here): other settings, the same instants
+    in_t_norm = stronger.replace("cycle = ", "cycle_norm = ")
+    assert rerun(in_t_norm) == (nz, peak)
+    # the archive is newer than its product: recomputed
+    later = max(v[1] for v in stamps(out).values()) + 1_000_000_000
+    os.utime(archive, ns=(later, later))
+    rerun(in_t_norm)
+
+    # a product that cannot be made is a failure of that member's stress stage
+    make_study(tmp_path, forces=(1000.0,), figures=[], reference="none",
+               stress='depths = [0.0]\nbody = "indenter"\n')
+    assert cli.main(["pipeline", str(path), "--no-progress"]) == 1
+    summary = json.loads((out / "summary.json").read_text())
+    assert [f["stage"] for f in summary["failed"]] == ["stress"]
+    assert "is rigid" in summary["failed"][0]["error"]
+    assert not [p for p in (out / "stress").iterdir() if p.name != product.name]
+
+
+@pytest.mark.parametrize("table, parts", [
+    ("depth = [0.0]\n", ["unknown key 'stress.depth' (did you mean 'depths'?)",
+                         "stress.depths is required"]),
+    ("depths = [0.0, -1e-4]\nbody = \"ball\"\n",
+     ["stress.depths must be a list of depths [m] >= 0", "stress.body must be one of"]),
+    ("depths = {max = 1e-4, cont = 3}\n",
+     ["unknown key 'stress.depths.cont' (did you mean 'count'?)"]),
+    ("depths = [0.0]\ncriterion = \"crosland\"\n",
+     ["stress.criterion = 'crosland' is not a criterion (did you mean 'crossland'?)"]),
+    ("depths = [0.0]\ncriterion = \"dang_van\"\ntorsion_limit = 4e8\nyoung = 2e11\n",
+     ["stress.bending_limit is required for criterion = 'dang_van'",
+      "stress.young = 200000000000.0 is not used by criterion = 'dang_van'",
+      "needs the stress over a cycle"]),
+    ("depths = [0.0]\ntime = \"al\"\ncycle = [1.0, 0.0]\n",
+     ["stress.time must be 'last', 'all' or a list of times [s]",
+      "stress.cycle = [1.0, 0.0]: t_start must be < t_end"]),
+    ("depths = [0.0]\ntime = \"all\"\ncriterion = \"amplitude\"\ncycle = [0.0, 1.0]\n"
+     "cycle_norm = [0.0, 1.5]\n",
+     ["stress.cycle_norm must be [a, b], 0 <= a < b <= 1",
+      "stress.cycle and stress.cycle_norm cannot both be given"]),
+    ("depths = [0.0]\ncycle_norm = [0.2, 1.0]\n",
+     ["stress.cycle_norm = [0.2, 1.0] is not used without a criterion"]),
+])
+def test_bad_stress_table_exit_2(tmp_path, capsys, table, parts):
+    path = make_study(tmp_path, forces=(1000.0,), figures=[], reference="none",
+                      stress=table)
+    assert cli.main(["pipeline", str(path), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    for part in parts:
+        assert part in err, (part, err)
+    assert not (tmp_path / "runs").exists()                  # nothing run, nothing written
+
+
+def test_the_examples_stress_table_reads(tmp_path):
+    """examples/pipeline.toml's commented-out [stress] block, uncommented, is valid: 13
+    depths to 0.6 mm, Crossland over t_norm 0.2 to 1 (the default main job leaves it out)."""
+    examples = pathlib.Path(__file__).resolve().parents[1] / "examples"
+    for name in ("sweep.toml", "paper-maxwell.toml"):
+        (tmp_path / name).write_text((examples / name).read_text())
+    text = (examples / "pipeline.toml").read_text()
+    assert read_pipeline_file(examples / "pipeline.toml").stress is None
+    lines = text.splitlines()
+    start = lines.index("# [stress]")
+    block = [ln[2:] for ln in lines[start:] if ln.startswith("# ")]
+    (tmp_path / "pipeline.toml").write_text("\n".join(lines[:start] + block) + "\n")
+    spec = read_pipeline_file(tmp_path / "pipeline.toml").stress
+    assert len(spec.depths) == 13 and spec.depths[-1] == pytest.approx(6e-4)
+    assert spec.criterion == "crossland" and spec.cycle_norm == (0.2, 1.0)

@@ -7,8 +7,10 @@ from matplotlib.image import imread
 
 import contactpipe as cp
 from contactpipe.pipeline import plot
+from contactpipe.pipeline.inputs import centre_rows
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.exceptions import ArchiveError
+from contactpipe.stress import save_stress
 
 from helpers import fretting_scene
 
@@ -83,8 +85,8 @@ def test_default_instants_include_turning_points(archives):
 
 
 def test_centre_rows():
-    assert list(plot._centre_rows(np.array([-1.5, -0.5, 0.5, 1.5]))) == [1, 2]
-    assert list(plot._centre_rows(np.array([-1.0, 0.0, 1.0]))) == [1]
+    assert list(centre_rows(np.array([-1.5, -0.5, 0.5, 1.5]))) == [1, 2]
+    assert list(centre_rows(np.array([-1.0, 0.0, 1.0]))) == [1]
 
 
 @pytest.mark.parametrize("kind", ["fretting", "creep"])
@@ -214,3 +216,88 @@ def test_standard_figures_refuse_a_file_as_folder(archives, tmp_path):
     with pytest.raises(OutputPathError, match="is a file, not a folder"):
         plot.standard_figures(archives["creep"], tmp_path / "f")
     assert (tmp_path / "f").read_text() == "x"
+
+
+# --------------------------------------------------------------------------- stress kind
+
+@pytest.fixture(scope="module")
+def stress_file(archives):
+    """A stress file of the tiny fretting archive: every instant, three depths."""
+    st = cp.subsurface_stress(archives["fretting"], [0.0, 5e-5, 1.5e-4], time="all")
+    return save_stress(st, archives["folder"] / "stress.nc")
+
+
+def titles(fig):
+    return " ".join(ax.get_title() for ax in fig.axes)
+
+
+def test_stress_kind(stress_file, tmp_path, capsys):
+    """A stress file's default kind is stress: the von Mises section through the centre
+    and the surface map, 800 x 500 pixels like every figure; --variable and --instant
+    choose the field and the instant."""
+    assert plot.input_kind(stress_file) == "stress"
+    assert cli_main(["plot", str(stress_file), "-o", str(tmp_path / "s.png")]) == 0
+    check_png(tmp_path / "s.png")
+    assert cli_main(["plot", str(stress_file), "-o", str(tmp_path / "t.png"), "--kind",
+                     "stress", "--variable", "s13", "--instant", "4"]) == 0
+    check_png(tmp_path / "t.png")
+    assert capsys.readouterr().out.count("wrote") == 2
+    fig = plot.plot_stress(stress_file)
+    assert len(fig.axes) == 4 and "von_mises at x2" in titles(fig)    # 2 panels, 2 bars
+    assert "t = 1 s" in titles(fig)
+    assert "t = 0.2 s" in titles(plot.plot_stress(stress_file, "s13", instant=4))
+
+
+def test_stress_kind_draws_a_criterion(archives, tmp_path):
+    """A dataset holding a criterion (a fatigue result, or a stress file with one) is
+    drawn by the criterion's main field unless told otherwise."""
+    st = cp.subsurface_stress(archives["fretting"], [0.0, 1e-4], time="all")
+    fi = cp.fatigue(st.isel(time=slice(4, None)), "amplitude")
+    assert "equivalent_amplitude at x2" in titles(plot.plot_stress(fi))
+    merged = st.merge(fi.drop_vars(["maximum", "maximum_x1", "maximum_x2", "maximum_x3"]))
+    merged.attrs = dict(st.attrs, criterion_field=fi.attrs["criterion_field"])
+    check_png(plot.save_figure(plot.plot_stress(merged), tmp_path / "c.png"))
+    assert "equivalent_amplitude" in titles(plot.plot_stress(merged))
+    assert "von_mises" in titles(plot.plot_stress(merged, "von_mises"))
+    with pytest.raises(ValueError, match="field 'p' is not in the dataset"):
+        plot.plot_stress(merged, "p")
+
+
+@pytest.mark.parametrize("source, kind, name", [
+    ("archive", "stress", "an archive"),
+    ("stress", "profiles", "a stress file"),
+    ("stress", "all", "a stress file"),
+    ("stress", "sweep", "a stress file"),
+    ("sweep", "maps", "a sweep folder"),
+    ("sweep", "stress", "a sweep folder"),
+])
+def test_kind_that_does_not_apply_is_one_line_exit_2(archives, stress_file, tmp_path, capsys,
+                                                     source, kind, name):
+    sweep_dir = tmp_path / "sweep"
+    sweep_dir.mkdir()
+    path = {"archive": archives["folder"] / "fretting.nc", "stress": stress_file,
+            "sweep": sweep_dir}[source]
+    out = tmp_path / "x.png"
+    assert cli_main(["plot", str(path), "-o", str(out), "--kind", kind]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert f"--kind {kind} does not apply to {name} ({path})" in err
+    assert "a stress file takes stress" in err and "a sweep folder takes sweep" in err
+    assert not out.exists() and list(sweep_dir.iterdir()) == []
+
+
+def test_inputs_are_opened_one_way(archives, stress_file, tmp_path):
+    """A path given to a figure is opened as what it holds; the wrong kind of input is
+    one ArchiveError naming both."""
+    with plot.open_input(stress_file) as (kind, ds):
+        assert kind == "stress" and "von_mises" in ds
+    with plot.open_input(archives["folder"] / "creep.nc") as (kind, ds):
+        assert kind == "archive" and "p" in ds
+    with pytest.raises(ArchiveError, match=r"stress.nc is a stress file, not an archive"):
+        plot.plot_profiles(stress_file)
+    with pytest.raises(ArchiveError, match=r"creep.nc is an archive, not a stress file"):
+        plot.plot_stress(archives["folder"] / "creep.nc")
+    with pytest.raises(ArchiveError, match=r"is a sweep folder, not an archive"):
+        plot.plot_radii(tmp_path)
+    with pytest.raises(ArchiveError, match="no such archive"):
+        plot.plot_radii(tmp_path / "absent.nc")

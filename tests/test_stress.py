@@ -12,6 +12,7 @@ import pathlib
 import subprocess
 import sys
 import warnings
+import weakref
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ import xarray as xr
 from scipy import integrate
 
 import contactpipe as cp
+import contactpipe.stress as stress_module
 from contactpipe.analytic.hamilton import (hamilton_stress, hertz_axis_stress,
                                            trailing_edge_tension)
 from contactpipe.pipeline import cli
@@ -455,6 +457,34 @@ def test_viscoelastic_archive_lazy_equals_eager(tmp_path):
     assert auto["s11"].chunks is not None
     assert np.allclose(auto["s33"].values, eager["s33"].sel(time=[0.2, 1.0]).values,
                        rtol=0, atol=1e-6)
+
+
+def test_lazy_save_writes_one_block_at_a_time(tmp_path, monkeypatch):
+    """save_stress streams a lazy stress dataset: each (instants x depths) block is
+    computed once, its seven variables together, and written before the next block is
+    computed (no block result is alive when the next one starts), whatever order a dask
+    scheduler would choose; the file equals the in-memory result."""
+    path = tmp_path / "run.nc"
+    cp.simulate(tiny_scene("fretting"), path, progress=False)
+    alive, seen = [], []
+    block = stress_module._block
+
+    def tracked(*args):
+        seen.append(sum(r() is not None for r in alive))
+        out = block(*args)
+        alive.append(weakref.ref(out))
+        return out
+
+    monkeypatch.setattr(stress_module, "_block", tracked)
+    depths = [0.0, 5e-5, 1e-4]
+    st = subsurface_stress(cp.open_archive(path), depths, time="all",
+                           chunks={"time": 4, "x3": 2})
+    save_stress(st, tmp_path / "st.nc")
+    assert len(seen) == 6 * 2 and max(seen) == 0          # 21 instants / 4, 3 depths / 2
+    eager = subsurface_stress(cp.open_archive(path).load(), depths, time="all")
+    with open_stress(tmp_path / "st.nc") as back:
+        for v in ("s11", "s23", "von_mises"):
+            assert np.array_equal(back[v].values, eager[v].values)
 
 
 def test_save_and_open_round_trip(tmp_path, sliding):

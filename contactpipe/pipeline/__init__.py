@@ -10,8 +10,11 @@ They read and write archives (:mod:`contactpipe.archive`); only the speed figure
                  re-exports the sweep stage's public names
 ``compare_cli``  ``contactpipe compare`` (the table from compare, the figure from plot)
 ``bench``        ``contactpipe bench``: speed figures
+``stress_cmd``   ``contactpipe stress`` and the pipeline's ``[stress]`` product
 ``plot``         figures: functions take ``ax=``/``fig=`` and return the Figure;
-                 :func:`~contactpipe.pipeline.plot.save_figure` writes them
+                 :func:`~contactpipe.pipeline.plot.save_figure` writes them; inputs
+                 (an archive, a stress file, a sweep folder) opened one way
+``plot_stress``  the panels of the ``stress`` figure (x1-x3 section, surface map)
 ``compare``      error tables against a closed form or a reference archive
 ``combine``      :func:`open_sweep`: a sweep folder as one Dataset
 ``execute``      where the members run, and who writes their archives
@@ -19,5 +22,5 @@ They read and write archives (:mod:`contactpipe.archive`); only the speed figure
 ``manifest``     a sweep folder's ``manifest.json``, written and validated
 ``members``      a sweep's axes parsed into members, each a validated scene
 ``parameters``   derived sweep parameters (``tau_ratio``, :func:`register_parameter`)
-``inputs``       what the stages read from an archive: grid, scene, radii
+``inputs``       what the stages read from an archive: grid, scene, centre rows, radii
 """

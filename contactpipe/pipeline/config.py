@@ -31,27 +31,43 @@ Pipeline file::
     [plot]
     figures = ["profiles", "hysteresis", "radii", "sweep"]
     variables = ["contact_area"]
+    [stress]                       # optional: a subsurface-stress product per member
+    depths = [0.0, 1e-4, 2e-4]     # m; or {max = 1e-3, count = 11} (from min = 0)
+    body = "halfspace"             # or "indenter"
+    time = "all"                   # "last" (default), "all" or a list of times [s]
+    criterion = "crossland"        # none | amplitude | crossland | dang_van | swt
+    torsion_limit = 400e6          # the criterion's constants [Pa]
+    bending_limit = 600e6
+    cycle = [0.2, 1.0]             # s: the instants the criterion runs over (default all);
+                                   # or cycle_norm = [0.2, 1.0], in t_norm of each member
     [dask]                         # overrides the sweep file's [dask]
     scheduler = ""
 """
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import pathlib
 from collections.abc import Mapping
 
+import numpy as np
+
 from ..exceptions import SceneError
+from ..fatigue import CRITERIA
 from ..files import read_toml
 from ..nomenclature import SERIES, VARIABLES
 from ..scene import Scene
+from ..stress import BODIES
 from ..tables import Field, Reader, did_you_mean, nesting_depth, show
 from .members import MODES
 
-__all__ = ["SweepFile", "PipelineSpec", "read_sweep_file", "load_sweep_file",
-           "read_sweep_table", "read_dask_table", "read_pipeline_file", "flatten_axes",
-           "MODES", "CLOSED_FORM", "MEMBER_FIGURES", "FIGURES", "DEFAULT_FIGURES",
-           "SWEEP_FIELDS", "DASK_FIELDS", "PIPELINE_FIELDS", "COMPARE_FIELDS",
-           "PLOT_FIELDS", "MAX_AXIS_DEPTH"]
+__all__ = ["SweepFile", "PipelineSpec", "StressSpec", "read_sweep_file", "load_sweep_file",
+           "read_sweep_table", "read_dask_table", "read_stress_table", "read_pipeline_file",
+           "flatten_axes", "MODES", "CLOSED_FORM", "MEMBER_FIGURES", "FIGURES",
+           "DEFAULT_FIGURES", "SWEEP_FIELDS", "DASK_FIELDS", "PIPELINE_FIELDS",
+           "COMPARE_FIELDS", "PLOT_FIELDS", "STRESS_FIELDS", "DEPTH_FIELDS",
+           "CONSTANT_FIELDS", "STRESS_CRITERIA", "MAX_AXIS_DEPTH", "MAX_DEPTHS"]
 
 CLOSED_FORM = "closed_form"
 MEMBER_FIGURES = ("profiles", "hysteresis", "radii", "maps")
@@ -62,6 +78,8 @@ MAX_AXIS_DEPTH = 8
 #: Caps on the cluster's sizes, against absurd values.
 MAX_WORKERS = 1024
 MAX_RETRIES = 100
+#: Cap on the depths of a stress product.
+MAX_DEPTHS = 10_000
 
 _INT_1 = "an integer >= 1"
 
@@ -93,6 +111,7 @@ PIPELINE_FIELDS = (
     Field("sweep", "table", "file = \"sweep.toml\", or base and [sweep.axes]"),
     Field("compare", "table", "reference"),
     Field("plot", "table", "figures, variables"),
+    Field("stress", "table", "depths, body, time, criterion and its constants"),
     Field("dask", "table", ", ".join(f.name for f in DASK_FIELDS)),
 )
 COMPARE_FIELDS = (
@@ -105,6 +124,113 @@ PLOT_FIELDS = (
     Field("variables", ("string", "strings"), "a list of series names", ok=bool,
           min_length=1, default=("contact_area",)),
 )
+
+
+STRESS_CRITERIA = ("none",) + tuple(CRITERIA)
+_PA = "a finite number > 0 [Pa]"
+#: The criteria's constants (:func:`contactpipe.fatigue`); which apply to which criterion
+#: is read from :data:`contactpipe.fatigue.CRITERIA`.
+CONSTANT_FIELDS = (
+    Field("torsion_limit", "number", _PA + ", the fully reversed torsion fatigue limit",
+          ok=lambda x: x > 0, unit="Pa"),
+    Field("bending_limit", "number", _PA + ", the fully reversed bending fatigue limit",
+          ok=lambda x: x > 0, unit="Pa"),
+    Field("young", "number", _PA + ", Young's modulus", ok=lambda x: x > 0, unit="Pa"),
+    Field("poisson", "number", "a number in [0, 0.5]", ok=lambda x: 0 <= x <= 0.5, unit="1"),
+    Field("plane_step", "number", "an angle in (0, 90] [deg]", ok=lambda x: 0 < x <= 90,
+          unit="deg"),
+    Field("shear_amplitude", "choice", options=("mcb", "longest_chord")),
+    Field("tolerance", "number", "a number in (0, 0.01]", ok=lambda x: 0 < x <= 0.01,
+          unit="1"),
+)
+STRESS_FIELDS = (
+    Field("depths", ("numbers", "table"), "a list of depths [m] >= 0, or a table "
+          "{max = [m], count = [1], min = [m] (default 0)}", ok=lambda z: z >= 0,
+          min_length=1, unit="m",
+          check=lambda v, key: (f"{key} holds {len(v)} depths: above the cap of "
+                                f"{MAX_DEPTHS}" if len(v) > MAX_DEPTHS else None)),
+    Field("body", "choice", options=BODIES, default="halfspace"),
+    Field("time", "numbers", "'last', 'all' or a list of times [s] of the archive",
+          options=("last", "all"), min_length=1, default="last", unit="s"),
+    Field("criterion", "string", "one of " + ", ".join(map(repr, STRESS_CRITERIA)),
+          default="none",
+          check=lambda v, key: None if v in STRESS_CRITERIA else (
+              f"{key} = {v!r} is not a criterion{did_you_mean(v, STRESS_CRITERIA)}; "
+              f"allowed: {', '.join(STRESS_CRITERIA)}")),
+    Field("cycle", "numbers", "[t_start, t_end] [s], t_start < t_end: the instants the "
+          "criterion runs over", length=2, unit="s",
+          check=lambda v, key: None if v[0] < v[1] else f"{key} = {list(v)}: t_start must "
+                                                        "be < t_end"),
+    Field("cycle_norm", "numbers", "[a, b], 0 <= a < b <= 1: the instants with a <= t_norm "
+          "<= b, t_norm = (t - t_first)/(t_last - t_first) over the member's archive",
+          ok=lambda x: 0 <= x <= 1, length=2, unit="1",
+          check=lambda v, key: None if v[0] < v[1] else f"{key} = {list(v)}: a must be < b"),
+    Field("precision", "choice", options=("float64", "float32"), default="float64"),
+    Field("figure", "bool", default=True),
+) + CONSTANT_FIELDS
+DEPTH_FIELDS = (
+    Field("max", "number", "a finite number > 0 [m]", ok=lambda x: x > 0, required=True,
+          unit="m"),
+    Field("count", "integer", "an integer >= 2", ok=lambda n: n >= 2, required=True,
+          cap=MAX_DEPTHS, cap_why="depths of the stress product"),
+    Field("min", "number", "a finite number >= 0 [m]", ok=lambda x: x >= 0, default=0.0,
+          unit="m"),
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class StressSpec:
+    """The ``[stress]`` table of a pipeline file, read and validated
+    (:func:`read_stress_table`): the subsurface-stress product of each member.
+
+    Attributes
+    ----------
+    depths : tuple of float
+        Depths into the body [m], ascending, distinct.
+    body : str
+        "halfspace" or "indenter".
+    time : str or tuple of float
+        "last", "all" or times [s] of the archive.
+    criterion : str or None
+        A criterion of :func:`contactpipe.fatigue`, or None.
+    constants : tuple of (str, object)
+        The criterion's constants as given, sorted by name.
+    cycle : tuple of float or None
+        (t_start, t_end) [s]: the instants the criterion runs over; None: all.
+    cycle_norm : tuple of float or None
+        (a, b): the same in t_norm = (t - t_first)/(t_last - t_first) of the member's
+        archive (the sweep's t_norm), for members whose windows differ.
+    precision : str
+        Storage type of the stresses.
+    figure : bool
+        Draw ``figures/<digest>-stress.png``.
+    """
+
+    depths: tuple
+    body: str = "halfspace"
+    time: str | tuple = "last"
+    criterion: str | None = None
+    constants: tuple = ()
+    cycle: tuple | None = None
+    cycle_norm: tuple | None = None
+    precision: str = "float64"
+    figure: bool = True
+
+    def settings(self) -> dict:
+        """Everything that decides the product's content (not whether a figure is
+        drawn), as JSON-ready values."""
+        return {"depths": list(self.depths), "body": self.body,
+                "time": self.time if isinstance(self.time, str) else list(self.time),
+                "criterion": self.criterion, "constants": dict(self.constants),
+                "cycle": None if self.cycle is None else list(self.cycle),
+                "cycle_norm": None if self.cycle_norm is None else list(self.cycle_norm),
+                "precision": self.precision}
+
+    def digest(self) -> str:
+        """A stable hash of :meth:`settings` (16 hex digits): a product whose stored
+        digest differs is recomputed."""
+        text = json.dumps(self.settings(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 @dataclasses.dataclass
@@ -134,6 +260,7 @@ class PipelineSpec:
     reference: str | pathlib.Path | None = CLOSED_FORM   # CLOSED_FORM, a path, or None
     figures: tuple = DEFAULT_FIGURES
     variables: tuple = ("contact_area",)
+    stress: StressSpec | None = None
     scheduler: str | None = None
     n_workers: int | None = None
     threads_per_worker: int = 1
@@ -394,6 +521,79 @@ def _read_plot(r: Reader, problems: list):
     return figures, variables
 
 
+def _read_depths(r: Reader):
+    """The depths of [stress] (required): a list, or {max, count, min} spread evenly."""
+    f = _field(STRESS_FIELDS, "depths")
+    if not r.has("depths"):
+        r.missing("depths", "", f.wording)
+        return None
+    v = r.value(f)
+    if v is None:
+        return None
+    if not isinstance(v, dict):
+        return tuple(float(z) for z in np.unique(v))
+    d = Reader(v, r.key("depths"), r.problems)
+    d.check_keys(DEPTH_FIELDS)
+    spec = d.read(DEPTH_FIELDS)
+    if None in spec.values():
+        return None
+    if not spec["min"] < spec["max"]:
+        d.add(f"{d.key('min')} = {spec['min']!r} must be < {d.key('max')} = {spec['max']!r}")
+        return None
+    return tuple(float(z) for z in np.linspace(spec["min"], spec["max"], spec["count"]))
+
+
+def _read_constants(r: Reader, criterion):
+    """The constants of [stress] that ``criterion`` takes: its required ones must be
+    given, those it does not take are refused."""
+    _, _, _, required, optional = CRITERIA.get(criterion, (None, None, None, {}, {}))
+    need = f" for criterion = {criterion!r}"
+    out = {}
+    for f in CONSTANT_FIELDS:
+        if f.name not in required and f.name not in optional:
+            r.forbid(f.name, f"by criterion = {criterion or 'none'!r}")
+            continue
+        v = r.value(f, need=need, required=f.name in required)
+        if v is not None:
+            out[f.name] = v
+    return tuple(sorted(out.items()))
+
+
+def read_stress_table(raw, problems: list) -> StressSpec | None:
+    """Validate a pipeline file's ``[stress]`` table (module docstring); None when it has
+    problems (appended to ``problems``)."""
+    before = len(problems)
+    r = Reader(raw, "stress", problems)
+    r.check_keys(STRESS_FIELDS)
+    depths = _read_depths(r)
+    values = r.read([f for f in STRESS_FIELDS if f.name in
+                     ("body", "time", "criterion", "cycle", "cycle_norm", "precision",
+                      "figure")])
+    criterion = None if values["criterion"] in (None, "none") else values["criterion"]
+    if values["criterion"] is None:           # refused above: its constants are unknown
+        return None
+    constants = _read_constants(r, criterion)
+    time = values["time"]
+    if criterion is None:
+        r.forbid("cycle", "without a criterion")
+        r.forbid("cycle_norm", "without a criterion")
+    else:
+        if r.has("cycle") and r.has("cycle_norm"):
+            r.add("stress.cycle and stress.cycle_norm cannot both be given; keep one")
+        if time == "last" or (isinstance(time, tuple) and len(set(time)) < 2):
+            r.add(f"stress.criterion = {criterion!r} needs the stress over a cycle: give "
+                  f"stress.time = \"all\" or a list of at least 2 times [s], got "
+                  f"{time if isinstance(time, str) else list(time)!r}")
+    if len(problems) > before:
+        return None
+    if isinstance(time, tuple):
+        time = tuple(float(t) for t in np.unique(time))
+    return StressSpec(depths=depths, body=values["body"], time=time, criterion=criterion,
+                      constants=constants, cycle=values["cycle"],
+                      cycle_norm=values["cycle_norm"], precision=values["precision"],
+                      figure=values["figure"])
+
+
 def read_pipeline_file(path) -> PipelineSpec:
     """Read and validate a pipeline file (module docstring).
 
@@ -417,6 +617,10 @@ def read_pipeline_file(path) -> PipelineSpec:
     out = _read_out(sw["out"], here, problems)
     reference = _read_compare(r, here, problems)
     figures, variables = _read_plot(r, problems)
+    stress = None
+    if r.has("stress"):
+        table = r.value(_field(PIPELINE_FIELDS, "stress"))
+        stress = None if table is None else read_stress_table(table, problems)
     dask = dict(sw["dask"])
     dask.update(read_dask_table(d.get("dask"), "dask", problems))
     if problems:
@@ -424,4 +628,4 @@ def read_pipeline_file(path) -> PipelineSpec:
     dask = {k: v for k, v in dask.items() if v is not None}
     return PipelineSpec(path=path, name=name, out=out, base=sw["base"], axes=sw["axes"],
                         mode=sw["mode"], reference=reference, figures=figures,
-                        variables=variables, **dask)
+                        variables=variables, stress=stress, **dask)

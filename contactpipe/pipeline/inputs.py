@@ -1,5 +1,5 @@
 """What the stages read from an archive besides its variables: its cell grid, its scene,
-and the radius of an area.
+the rows through its centre, and the radius of an area.
 
 The lowest module of :mod:`contactpipe.pipeline`: the comparison, the figures and the
 sweeps all use these, so each is written once.
@@ -16,7 +16,7 @@ from ..archive import open_archive
 from ..exceptions import ArchiveError, SceneError
 from ..scene import Scene
 
-__all__ = ["grid_of", "radius_of_area", "scene_of", "scene_digest"]
+__all__ = ["grid_of", "centre_rows", "radius_of_area", "scene_of", "scene_digest"]
 
 
 def scene_of(ds) -> Scene:
@@ -73,6 +73,13 @@ def grid_of(ds) -> tuple[np.ndarray, np.ndarray, float, float]:
     else:
         d1, d2 = scene_of(ds).resolved_grid().spacing()
     return x1, x2, d1, d2
+
+
+def centre_rows(x2) -> np.ndarray:
+    """Indices of the row(s) through the centre of a grid: the one with x2 = 0, or for an
+    even grid the two middle rows (x2 nearest 0), which the figures average."""
+    ax = np.abs(np.asarray(x2, float))
+    return np.flatnonzero(ax <= ax.min() * (1 + 1e-9) + 1e-15)
 
 
 def radius_of_area(area) -> float:

@@ -1,7 +1,11 @@
-"""Standard figures of an archive or a sweep (matplotlib, never pyplot).
+"""Standard figures of an archive, a stress file or a sweep (matplotlib, never pyplot).
 
 ``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|all``;
-``contactpipe plot SWEEP_DIR/ -o FIG.png [--variable NAME]`` for a sweep folder.
+``contactpipe plot STRESS.nc -o FIG.png [--kind stress] [--variable FIELD]`` for a stress
+file (written by ``contactpipe stress`` or the pipeline's ``[stress]`` product);
+``contactpipe plot SWEEP_DIR/ -o FIG.png [--kind sweep] [--variable NAME]`` for a sweep
+folder. Each kind of input takes its own kinds (:data:`INPUTS`); a kind that does not
+apply to the input is one line on stderr and exit status 2, nothing written.
 
 - :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
   instants, the closed form (or a reference archive) in grey (as the paper's figures 2
@@ -11,6 +15,9 @@
 - :func:`plot_hysteresis`: the fretting loop T1 against omega1.
 - :func:`plot_radii`: contact and stick radii against time.
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
+- :func:`plot_stress`: a stress field or fatigue criterion (von Mises, or the criterion's
+  main field when the file holds one) on the x1-x3 plane through the centre and on the
+  surface (:mod:`contactpipe.pipeline.plot_stress` draws the panels).
 - :func:`standard_figures`: every figure that applies to an archive, written to a folder.
 
 Every plotting function draws into the axes it is given (``ax=``, or ``fig=`` for the
@@ -18,7 +25,9 @@ figures with several axes) or into a new :class:`matplotlib.figure.Figure` (8 x 
 100 dpi, tight layout; never pyplot: no global state, no window), and returns the
 Figure, so a notebook shows it and a script saves it. :func:`save_figure` is the one
 place a figure is written: a PNG of 800 x 500 pixels, written atomically (a temporary
-file renamed onto the target) after the path is checked.
+file renamed onto the target) after the path is checked. Inputs given as paths are opened
+one way (:func:`open_input`): an archive (verified), a stress file or a sweep folder, told
+apart by what the path holds.
 
     >>> fig = plot_profiles("run.nc")
     >>> save_figure(fig, "profiles.png")
@@ -29,7 +38,9 @@ import argparse
 import contextlib
 import itertools
 import math
+import os
 import pathlib
+import sys
 import warnings
 
 import numpy as np
@@ -40,18 +51,29 @@ from ..exceptions import ArchiveError, ContactpipeError
 from ..files import atomic_path, check_output_dir, check_output_path
 from ..materials import composite_modulus
 from ..nomenclature import VARIABLES
+from ..stress import is_stress_file, open_stress
 from .combine import MANIFEST, open_sweep
 from .compare import load_dataset
-from .inputs import grid_of, radius_of_area, scene_of
+from .inputs import centre_rows, grid_of, radius_of_area, scene_of
+from .plot_stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
 from .reference import ClosedForm, closed_form_for, closed_form_solution
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
-           "standard_figures", "save_figure", "new_figure", "has_tangential_load",
-           "figure_applies", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS"]
+           "plot_stress", "plot_stress_section", "plot_stress_surface", "standard_figures",
+           "save_figure", "new_figure", "has_tangential_load", "figure_applies",
+           "input_kind", "open_input", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS",
+           "INPUTS"]
 
 FIGSIZE = (8.0, 5.0)        # in
 DPI = 100
+#: The figures of an archive (``all``: every one that applies, into a folder).
 KINDS = ("profiles", "maps", "hysteresis", "radii")
+#: Each kind of input: what it is called, and the figure kinds that apply (default first).
+INPUTS = {
+    "archive": ("an archive", KINDS + ("all",)),
+    "stress": ("a stress file", ("stress",)),
+    "sweep": ("a sweep folder", ("sweep",)),
+}
 GREY = "0.6"
 GREY_WIDE = "0.78"          # a wide light line under the numerical one
 STATUS_COLOURS = ("#e6e6e6", "#2c7bb6", "#d7191c")     # separated, stick, slip
@@ -109,22 +131,63 @@ def save_figure(fig, path) -> pathlib.Path:
     return path
 
 
-# --------------------------------------------------------------------------- helpers
+# --------------------------------------------------------------------------- inputs
 
-def _open(ds):
-    ds, _ = load_dataset(ds)
-    return ds
+def input_kind(path) -> str:
+    """What a figure input is: ``"sweep"`` (a folder), ``"stress"`` (a netCDF file holding
+    a stress field, :func:`contactpipe.stress.is_stress_file`) or ``"archive"`` (anything
+    else; opening it says when it is not one)."""
+    path = pathlib.Path(path)
+    if path.is_dir():
+        return "sweep"
+    return "stress" if is_stress_file(path) else "archive"
 
 
 @contextlib.contextmanager
-def _dataset(obj):
-    """The Dataset of ``obj`` (a Dataset or an archive path); closed after if opened here."""
-    ds = _open(obj)
+def open_input(path, expect: str | None = None):
+    """Open a figure input: yields (kind, Dataset) and closes it after.
+
+    An archive is opened verified (:func:`contactpipe.open_archive`), a stress file by
+    :func:`contactpipe.stress.open_stress`, a sweep folder by :func:`open_sweep`; all
+    lazily.
+
+    Raises
+    ------
+    ArchiveError
+        The input cannot be opened, or it is not of the kind ``expect`` (a key of
+        :data:`INPUTS`).
+    """
+    kind = input_kind(path)
+    if expect is not None and kind != expect:
+        raise ArchiveError(f"{path} is {INPUTS[kind][0]}, not {INPUTS[expect][0]}")
+    opener = {"archive": lambda p: load_dataset(p)[0], "stress": open_stress,
+              "sweep": open_sweep}[kind]
+    ds = opener(path)
     try:
-        yield ds
+        yield kind, ds
     finally:
-        if ds is not obj:
-            ds.close()
+        ds.close()
+
+
+@contextlib.contextmanager
+def _opened(obj, expect: str):
+    """The Dataset of ``obj``: a Dataset as it is, or a path opened by :func:`open_input`
+    as ``expect`` (and closed after)."""
+    if isinstance(obj, xr.Dataset):
+        yield obj
+        return
+    if not isinstance(obj, (str, os.PathLike)):
+        raise ArchiveError(f"expected a path or an xarray.Dataset, got {type(obj).__name__}")
+    with open_input(obj, expect) as (_, ds):
+        yield ds
+
+
+def _dataset(obj):
+    """The archive ``obj`` (a Dataset or a path), closed after if opened here."""
+    return _opened(obj, "archive")
+
+
+# --------------------------------------------------------------------------- helpers
 
 
 def _frictional(ds) -> bool:
@@ -193,14 +256,6 @@ def _scales(ds):
     pmax = float(ds["p"].max())
     amax = radius_of_area(float(ds["contact_area"].max()))
     return (pmax if pmax > 0 else 1.0), (amax if amax > 0 else 1.0), ("p_max", "a_max")
-
-
-def _centre_rows(x2):
-    """Indices of the row(s) through the centre: the one with x2 = 0, or for an even
-    grid the two middle rows (x2 nearest 0), averaged."""
-    ax = np.abs(np.asarray(x2, float))
-    m = ax.min()
-    return np.flatnonzero(ax <= m * (1 + 1e-9) + 1e-15)
 
 
 def _profile(da, k, rows):
@@ -292,7 +347,7 @@ def _draw_reference(ref, tn, scale, ax_p, ax_q):
     tr = np.asarray(ref["time"].values, float)
     ref_t = (tr - tr[0]) / (tr[-1] - tr[0]) if tr[-1] > tr[0] else np.zeros_like(tr)
     j = int(np.argmin(np.abs(ref_t - tn)))
-    rows = _centre_rows(ref["x2"].values)
+    rows = centre_rows(ref["x2"].values)
     xr1 = np.asarray(ref["x1"].values, float) / scale[1]
     ax_p.plot(xr1, _profile(ref["p"], j, rows) / scale[0], "-", color=GREY, lw=1.0,
               zorder=0)
@@ -306,7 +361,7 @@ def _profiles(ds, ks, sol, ref, fig):
     ``sol`` or reference Dataset ``ref`` in grey); returns the figure."""
     pH, aH, (pn, an) = _scales(ds)
     x1, x2, _, _ = grid_of(ds)
-    rows = _centre_rows(x2)
+    rows = centre_rows(x2)
     x2_row = float(np.mean(np.abs(x2[rows])))
     shear = "q1" in ds
     fig, axes = _grid_axes(fig, 2 if shear else 1, 1, sharex=True)
@@ -593,20 +648,6 @@ def _value_text(v):
     return str(v)
 
 
-@contextlib.contextmanager
-def _sweep(sw):
-    """The combined Dataset of ``sw`` (a Dataset or a sweep folder); closed after if
-    opened here."""
-    if isinstance(sw, xr.Dataset):
-        yield sw
-        return
-    opened = open_sweep(sw)
-    try:
-        yield opened
-    finally:
-        opened.close()
-
-
 def _axis_labels(ax, sw, variable, xname, reduced):
     known = VARIABLES.get(variable, {})
     units = sw[variable].attrs.get("units", known.get("units", ""))
@@ -647,7 +688,7 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
     ArchiveError
         ``variable`` or ``x`` is not in the sweep.
     """
-    with _sweep(sw) as sw:
+    with _opened(sw, "sweep") as sw:
         if variable not in sw:
             raise ArchiveError(f"variable {variable!r} is not in the sweep; it has: "
                                f"{', '.join(sorted(map(str, sw.data_vars)))}")
@@ -685,6 +726,45 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
     return fig
 
 
+# --------------------------------------------------------------------------- stress
+
+def plot_stress(st, field=None, instant=-1, *, fig=None):
+    """The ``stress`` kind: a field on the x1-x3 plane through the centre (depth
+    downwards, its largest value marked) and on the surface, side by side.
+
+    Parameters
+    ----------
+    st : xarray.Dataset or path
+        A stress dataset (:func:`contactpipe.subsurface_stress`), a fatigue result
+        (:func:`contactpipe.fatigue`), or a stress file (``contactpipe stress``, the
+        pipeline's ``[stress]`` product).
+    field : str, optional
+        The variable drawn; default the criterion's main field when the dataset holds
+        one (attribute ``criterion_field``), else ``von_mises``.
+    instant : int or float
+        Index (negative from the end) or time [s] of a field over time; default the
+        last instant.
+    fig : matplotlib.figure.Figure, optional
+        Draw into it (two axes side by side); default a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ArchiveError
+        A path that is not a stress file.
+    ValueError
+        ``field`` is not a field of the dataset over (x3, x1, x2), after the instant.
+    """
+    with _opened(st, "stress") as st:
+        time = None
+        if "time" in st.dims:
+            time = float(st["time"].values[_index(st, instant)])
+        return draw_stress(st, field, time, fig=new_figure() if fig is None else fig)
+
+
 # --------------------------------------------------------------------------- all
 
 def standard_figures(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
@@ -716,18 +796,24 @@ def standard_figures(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
 # --------------------------------------------------------------------------- CLI
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("archive", type=pathlib.Path,
-                        help="archive (netCDF), or a sweep folder")
+    parser.add_argument("archive", type=pathlib.Path, metavar="INPUT",
+                        help="an archive, a stress file (contactpipe stress) or a sweep "
+                             "folder")
     # str, not pathlib.Path: Path("") is "." and an empty -o must be refused, not the cwd
     parser.add_argument("-o", "--output", required=True, metavar="FIG",
                         help="the PNG to write (a folder with --kind all)")
-    parser.add_argument("--kind", choices=KINDS + ("all",), default="profiles",
-                        help="which figure (default: profiles)")
+    parser.add_argument("--kind", choices=sorted({k for _, ks in INPUTS.values() for k in ks}),
+                        default=None,
+                        help="which figure: for an archive profiles (default), maps, "
+                             "hysteresis, radii or all; for a stress file stress; for a "
+                             "sweep folder sweep")
     parser.add_argument("--instant", type=int, default=None,
-                        help="instant index K (negative from the end): the one profile "
-                             "or map shown")
-    parser.add_argument("--variable", default="contact_area",
-                        help="sweep folder only: the series to plot (default contact_area)")
+                        help="instant index K (negative from the end): the one profile, "
+                             "map or stress field shown")
+    parser.add_argument("--variable", default=None,
+                        help="sweep folder: the series to plot (default contact_area); "
+                             "stress file: the field (default the criterion's, else "
+                             "von_mises)")
 
 
 def _inputs(source: pathlib.Path) -> list:
@@ -738,27 +824,42 @@ def _inputs(source: pathlib.Path) -> list:
     return [source]
 
 
+def _kind_error(kind, what, source) -> str:
+    applies = "; ".join(f"{name} takes {', '.join(kinds)}" for name, kinds in INPUTS.values())
+    return (f"contactpipe: error: --kind {kind} does not apply to {INPUTS[what][0]} "
+            f"({source}): {applies}")
+
+
+def _draw(kind, source, args):
+    """The figure ``kind`` of ``source`` (one file)."""
+    k = -1 if args.instant is None else args.instant
+    if kind == "sweep":
+        return plot_sweep(source, args.variable or "contact_area")
+    if kind == "stress":
+        return plot_stress(source, args.variable, k)
+    if kind == "profiles":
+        return plot_profiles(source, None if args.instant is None else [args.instant])
+    if kind == "maps":
+        return plot_maps(source, k)
+    return plot_hysteresis(source) if kind == "hysteresis" else plot_radii(source)
+
+
 def main(args) -> int:
     source = args.archive
+    what = input_kind(source)
+    kind = args.kind or INPUTS[what][1][0]
+    if kind not in INPUTS[what][1]:
+        print(_kind_error(kind, what, source), file=sys.stderr)
+        return 2
     inputs = _inputs(source)
-    if args.kind == "all" and not source.is_dir():
+    if kind == "all":
         check_output_dir(args.output, "figure folder", inputs=inputs)
         written = standard_figures(source, args.output, "",
                                    -1 if args.instant is None else args.instant)
     else:
         target = check_output_path(args.output, "figure", inputs=inputs)
         check_output_dir(target.parent, "folder of the figure")
-        if source.is_dir():
-            fig = plot_sweep(source, args.variable)
-        elif args.kind == "profiles":
-            fig = plot_profiles(source, None if args.instant is None else [args.instant])
-        elif args.kind == "maps":
-            fig = plot_maps(source, -1 if args.instant is None else args.instant)
-        elif args.kind == "hysteresis":
-            fig = plot_hysteresis(source)
-        else:
-            fig = plot_radii(source)
-        written = [save_figure(fig, target)]
+        written = [save_figure(_draw(kind, source, args), target)]
     for path in written:
         print(f"wrote {path}")
     return 0

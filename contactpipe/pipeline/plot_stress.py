@@ -5,46 +5,54 @@
   marked.
 - :func:`plot_stress_surface`: the same field on the x1-x2 plane at one depth (the
   shallowest by default).
-- :func:`plot_stress`: both side by side.
+- :func:`plot_stress`: both side by side (the ``stress`` kind of ``contactpipe plot``).
 
 Each takes a dataset from :func:`contactpipe.subsurface_stress` (field over time, x3,
-x1, x2; one instant is drawn, the last by default) or from :func:`contactpipe.fatigue`
-(field over x3, x1, x2; default field: its ``criterion_field``). Axes in mm, stresses in
-MPa (dimensionless indices as they are). Every function takes ``ax=None`` / ``fig=None``
-and returns the Figure, so a notebook shows it and the pipeline saves it
-(:func:`save_figure`, atomic).
+x1, x2; one instant is drawn, the last by default), from :func:`contactpipe.fatigue`
+(field over x3, x1, x2), or a stress file of ``contactpipe stress`` or of the pipeline's
+``[stress]`` product (stresses and, when a criterion was asked for, its fields). The
+default field is the criterion's main one (attribute ``criterion_field``) when there is
+one, else von Mises. Axes in mm, stresses in MPa (dimensionless indices as they are).
+
+The conventions of :mod:`contactpipe.pipeline.plot`, which draws these as its ``stress``
+kind: every function takes ``ax=None`` / ``fig=None`` and returns the Figure; a new figure
+is 8 x 5 in at 100 dpi with a tight layout, never attached to pyplot; figures are written
+by :func:`contactpipe.pipeline.plot.save_figure` (atomic, 800 x 500 pixels).
 """
 from __future__ import annotations
 
-import pathlib
-import warnings
-
 import numpy as np
 
-from ..files import atomic_path
+from .inputs import centre_rows
 
-__all__ = ["plot_stress_section", "plot_stress_surface", "plot_stress", "save_figure",
-           "FIGSIZE", "DPI"]
+__all__ = ["plot_stress_section", "plot_stress_surface", "plot_stress", "default_field"]
 
-FIGSIZE = (11.0, 4.5)        # in
-DPI = 100
 MM = 1e3
 
 
 def _new_axes(ax, fig, ncols=1):
+    """(Figure, list of Axes): ``ax`` and its figure, or ``ncols`` Axes side by side in
+    ``fig`` (a new 8 x 5 in figure at 100 dpi when None, as plot.new_figure)."""
     from matplotlib.figure import Figure    # heavy: only when a figure is drawn
     if ax is not None:
-        return ax.figure, [ax]
+        return ax.get_figure(), [ax]
     if fig is None:
-        fig = Figure(figsize=FIGSIZE if ncols > 1 else (6.5, 4.5), dpi=DPI)
+        fig = Figure(figsize=(8.0, 5.0), dpi=100, layout="tight")
     axes = fig.subplots(1, ncols, squeeze=False)[0]
     return fig, list(axes)
+
+
+def default_field(data) -> str:
+    """The field drawn by default: the criterion's main field (``criterion_field``) when
+    the dataset holds it, else ``von_mises``."""
+    field = data.attrs.get("criterion_field")
+    return field if isinstance(field, str) and field in data.data_vars else "von_mises"
 
 
 def _field(data, field, time):
     """(DataArray over (x3, x1, x2), label, scale, unit) of the field to draw."""
     if field is None:
-        field = data.attrs.get("criterion_field", "von_mises")
+        field = default_field(data)
     if field not in data.data_vars:
         raise ValueError(f"field {field!r} is not in the dataset (it has "
                          f"{', '.join(v for v in data.data_vars if data[v].ndim >= 3)})")
@@ -67,11 +75,6 @@ def _field(data, field, time):
     return da, field, label, scale, title
 
 
-def _centre_rows(x2):
-    ax = np.abs(np.asarray(x2, float))
-    return np.flatnonzero(ax <= ax.min() * (1 + 1e-9) + 1e-15)
-
-
 def plot_stress_section(data, field=None, time=None, ax=None):
     """A field on the x1-x3 plane through the centre of the grid.
 
@@ -92,7 +95,7 @@ def plot_stress_section(data, field=None, time=None, ax=None):
     """
     da, name, label, scale, title = _field(data, field, time)
     fig, (ax,) = _new_axes(ax, None)
-    rows = _centre_rows(da["x2"].values)
+    rows = centre_rows(da["x2"].values)
     sec = np.asarray(da.isel(x2=rows).values, float).mean(axis=2) * scale    # (x3, x1)
     x1 = da["x1"].values * MM
     x3 = da["x3"].values * MM
@@ -150,14 +153,3 @@ def plot_stress(data, field=None, time=None, fig=None):
     plot_stress_surface(data, field, None, time, ax=axes[1])
     return fig
 
-
-def save_figure(fig, path) -> pathlib.Path:
-    """Tight layout, then write the figure as PNG atomically."""
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=DPI)
-    return path

@@ -1,11 +1,12 @@
-"""Batch pipeline: sweep -> compare -> plot, idempotent and safe to run from cron.
+"""Batch pipeline: sweep -> compare -> plot -> stress, idempotent and safe to run from cron.
 
 ``contactpipe pipeline PIPELINE.toml [--scheduler ADDRESS] [--workers N]
 [--shared-disk | --no-shared-disk] [--no-progress]``
 runs the sweep of the file (on dask, resumable: :mod:`contactpipe.pipeline.sweep`), compares every
 member with its closed form or a reference archive (:mod:`contactpipe.pipeline.compare`), draws the
 standard figures of every member and an overlay of the sweep (:mod:`contactpipe.pipeline.plot`),
-and writes a summary.
+computes the subsurface stress of every member when the file asks for it
+(:mod:`contactpipe.pipeline.stress_cmd`), and writes a summary.
 
 Pipeline file::
 
@@ -20,6 +21,14 @@ Pipeline file::
     [plot]                         # optional
     figures = ["profiles", "hysteresis", "radii", "sweep"]    # default: all four
     variables = ["contact_area"]   # what the sweep overlay shows (default contact_area)
+    [stress]                       # optional: the subsurface stress of every member
+    depths = [0.0, 1e-4, 2e-4]     # m, >= 0; or {max = 1e-3, count = 11} (min = 0)
+    body = "halfspace"             # or "indenter"
+    time = "all"                   # "last" (default), "all", or a list of times [s]
+    criterion = "crossland"        # none (default) | amplitude | crossland | dang_van | swt
+    torsion_limit = 400e6          # the criterion's constants [Pa] (docs/stress.md)
+    bending_limit = 600e6
+    cycle = [0.2, 1.0]             # s: the instants the criterion runs over (default all)
     [dask]                         # optional; overrides the sweep file's [dask]
     scheduler = ""                 # address, "synchronous", or "" (a LocalCluster);
     n_workers = 2                  # an address is TRUSTED code (see below)
@@ -42,6 +51,13 @@ Outputs, in ``out``
     Per member figures (``profiles``, ``hysteresis``, ``radii``).
 ``figures/sweep-<variable>.png``
     The members overlaid (:func:`contactpipe.pipeline.plot.plot_sweep`).
+``stress/<digest>.nc``, ``figures/<digest>-stress.png``
+    With ``[stress]``: the member's stress field over (time, x3, x1, x2) and, with a
+    criterion, the criterion's fields over (x3, x1, x2), in one file
+    (:func:`contactpipe.pipeline.stress_cmd.write_stress_product`; streamed block by
+    block, bounded memory), and its figure (the ``stress`` kind of
+    :mod:`contactpipe.pipeline.plot`: the criterion, else von Mises, on the x1-x3 plane
+    through the centre and on the surface).
 ``summary.json``
     What this run did: members (values, digest, status, error), products (path, written
     or up to date), failures, wall times. Rewritten atomically on every run.
@@ -51,7 +67,10 @@ Idempotent
 A second run with nothing changed does no solver work (every member is skipped: its
 archive is complete and valid) and rewrites no product: a comparison or figure is redone
 only when missing or older than its archive (or the reference archive); the sweep overlay
-when older than any member archive or when the set of members changed. Every product is
+when older than any member archive or when the set of members changed; a stress product
+when older than its archive or made with other ``[stress]`` settings (the digest of the
+settings is stored in the product and compared: a change of depths, body, instants,
+criterion, constants, cycle or precision recomputes it), its figure when older than it. Every product is
 written to a temporary name and renamed, so an interrupted run leaves no half file.
 Figures are drawn by :mod:`contactpipe.pipeline.plot` and written by its
 :func:`~contactpipe.pipeline.plot.save_figure`.
@@ -86,7 +105,7 @@ from ..exceptions import ArchiveError, ContactpipeError
 from ..exceptions import one_line as _one_line
 from ..files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
                      utc_now as _now, write_json as _write_json)
-from . import compare as compare_stage, plot as plot_stage
+from . import compare as compare_stage, plot as plot_stage, stress_cmd as stress_stage
 from .combine import open_sweep
 from .config import CLOSED_FORM, FIGURES, MEMBER_FIGURES, PipelineSpec, read_pipeline_file
 from .reference import closed_form_for
@@ -120,8 +139,8 @@ class PipelineResult:
     written, up_to_date : list of pathlib.Path
         Products written by this run, and those left alone because they were current.
     failed : list of dict
-        ``{"member", "digest", "stage", "error"}``; stage is simulate, compare, figures
-        or sweep-figure.
+        ``{"member", "digest", "stage", "error"}``; stage is simulate, compare, figures,
+        stress, stress-figure or sweep-figure.
     """
 
     spec: PipelineSpec
@@ -264,8 +283,42 @@ def _figure_products(m, archive, figdir, kinds, log: _Log) -> dict:
             "not_applicable": na}
 
 
+def _stress_product(st_spec, m, archive, out, log: _Log) -> dict:
+    """The ``[stress]`` product of one member (and its figure), unless current: not
+    older than the archive and made with the same settings (their digest)."""
+    product = out / "stress" / f"{m.digest}.nc"
+    rec = None
+    if _fresh(product, [archive]) and stress_stage.stored_digest(product) == st_spec.digest():
+        try:
+            rec = dict(stress_stage.product_record(product), status="up to date")
+            log.up_to_date.append(product)
+        except PRODUCT_ERRORS:            # unreadable after all: made anew
+            rec = None
+    if rec is None:
+        try:
+            rec = dict(stress_stage.write_stress_product(archive, product, st_spec),
+                       status="written")
+        except PRODUCT_ERRORS as err:
+            return log.fail(m.label, m.digest, "stress", err)
+        log.written.append(product)
+    if not st_spec.figure:
+        return rec
+    figure = out / "figures" / f"{m.digest}-stress.png"
+    if _fresh(figure, [product]):
+        log.up_to_date.append(figure)
+    else:
+        try:
+            plot_stage.save_figure(plot_stage.plot_stress(product), figure)
+        except PRODUCT_ERRORS as err:
+            rec["figure"] = log.fail(m.label, m.digest, "stress-figure", err)
+            return rec
+        log.written.append(figure)
+    rec["figure"] = str(figure)
+    return rec
+
+
 def _member_products(spec, m, out, log: _Log) -> dict:
-    """The comparison and figures of one member that is done."""
+    """The comparison, figures and stress product of one member that is done."""
     archive = out / m.file
     rec = {}
     if spec.reference is not None:
@@ -274,6 +327,8 @@ def _member_products(spec, m, out, log: _Log) -> dict:
     kinds = [k for k in spec.figures if k in MEMBER_FIGURES]
     if kinds:
         rec["figures"] = _figure_products(m, archive, out / "figures", kinds, log)
+    if spec.stress is not None:
+        rec["stress"] = _stress_product(spec.stress, m, archive, out, log)
     return rec
 
 
@@ -316,7 +371,7 @@ def _sweep_figures(spec, out, done: dict, previous: dict, log: _Log) -> dict:
 
 def run_pipeline(path, *, scheduler=None, progress=True, n_workers=None,
                  client=None, shared_disk=None) -> PipelineResult:
-    """Run a pipeline file: sweep -> compare -> plot -> summary (module docstring).
+    """Run a pipeline file: sweep -> compare -> plot -> stress -> summary (module docstring).
 
     Parameters
     ----------
@@ -388,6 +443,8 @@ def _summary(spec, res, started, t0, records, sweep_figs, log: _Log) -> dict:
                   "dims": res.manifest["dims"], "manifest": str(out / "manifest.json")},
         "compare": {"reference": None if spec.reference is None else str(spec.reference)},
         "figures": list(spec.figures),
+        "stress": None if spec.stress is None else {"settings": spec.stress.settings(),
+                                                    "digest": spec.stress.digest()},
         "members": members,
         "sweep_figures": sweep_figs,
         "failed": log.failed,
@@ -400,6 +457,7 @@ def _run_locked(spec, *, scheduler, progress, n_workers, client, shared_disk, t0
     previous = _read_previous(out)
     _clean_tmp(out / "compare")
     _clean_tmp(out / "figures")
+    _clean_tmp(out / "stress")
     res = sweep(spec.base, spec.axes, out, mode=spec.mode, client=client,
                 scheduler=scheduler or spec.scheduler,
                 n_workers=n_workers or spec.n_workers,

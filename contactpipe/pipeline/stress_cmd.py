@@ -13,22 +13,46 @@ The file is written atomically (nothing is left on failure).
 Exit status: 0 on success; 2 on bad input (arguments, an unreadable or foreign archive,
 an unknown body, a negative depth, a time not in the archive), with one line on stderr;
 1 when the computation or the write fails.
+
+The pipeline's ``[stress]`` product (:mod:`contactpipe.pipeline.run`) is written here too:
+:func:`write_stress_product` puts the stress and, when the pipeline file asks for a
+fatigue criterion, the criterion's fields in one file, with the settings that made it
+(their digest decides whether a later run recomputes it).
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import pathlib
 import sys
 
+import dask
+import netCDF4
 import numpy as np
+import xarray as xr
 
 from ..archive import open_archive
 from ..exceptions import ArchiveError, ContactpipeError, one_line
-from ..files import check_output_path
+from ..fatigue import fatigue
+from ..files import atomic_path, check_output_path
 from ..stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
-from .plot_stress import plot_stress, save_figure
+from .config import StressSpec
+from .plot import plot_stress, save_figure
 
-__all__ = ["add_arguments", "main", "parse_depths", "parse_time"]
+__all__ = ["add_arguments", "main", "parse_depths", "parse_time", "write_stress_product",
+           "product_record", "stored_digest", "SETTINGS_ATTR", "DIGEST_ATTR"]
+
+#: Attributes of a pipeline product: its settings (JSON) and their digest.
+SETTINGS_ATTR = "stress_settings"
+DIGEST_ATTR = "stress_settings_digest"
+#: Attributes of the largest von Mises stress of a product and where it is.
+PEAK_ATTRS = ("von_mises_max", "von_mises_max_time", "von_mises_max_x3",
+              "von_mises_max_x1", "von_mises_max_x2")
+#: HDF5 chunk cache per variable of the files the product opens [bytes]: every chunk is
+#: read once, so a small cache loses nothing (the default, up to 64 MiB per variable,
+#: would add up to 7 x 64 MiB reading a stress file back).
+CHUNK_CACHE_BYTES = 4 * 2 ** 20
 
 
 def parse_depths(text: str) -> list[float]:
@@ -134,3 +158,146 @@ def _summary(path) -> str:
                     f"m, x2 = {at['x2']:.4g} m, x3 = {at['x3']:.4g} m, t = {at['time']:.4g} s")
     except (ArchiveError, OSError) as err:          # pragma: no cover - just written
         return f"summary unavailable: {one_line(err)}"
+
+
+# --------------------------------------------------------------------------- the pipeline's product
+
+@contextlib.contextmanager
+def _small_chunk_cache():
+    """netCDF's default chunk cache, for the files opened meanwhile, set to
+    :data:`CHUNK_CACHE_BYTES` per variable (a process-wide setting, put back after)."""
+    size, nelems, preemption = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(CHUNK_CACHE_BYTES, nelems, preemption)
+    try:
+        yield
+    finally:
+        netCDF4.set_chunk_cache(size, nelems, preemption)
+
+
+def _peak(st) -> dict:
+    """The largest von Mises stress [Pa] of a stress file and where it is (time [s],
+    x3, x1, x2 [m]), read block by block."""
+    vm = st["von_mises"]
+    flat = vm.data.argmax()                          # dask: one block at a time
+    k = np.unravel_index(int(flat.compute() if hasattr(flat, "compute") else flat), vm.shape)
+    at = {d: float(st[d].values[i]) for d, i in zip(vm.dims, k)}
+    return {"von_mises_max": float(vm[tuple(int(i) for i in k)].values),
+            "von_mises_max_time": at["time"], "von_mises_max_x3": at["x3"],
+            "von_mises_max_x1": at["x1"], "von_mises_max_x2": at["x2"]}
+
+
+def _cycle(st, cycle):
+    """The instants of ``st`` within ``cycle`` = (t_start, t_end) [s] (all when None);
+    ValueError when fewer than 2."""
+    t = np.asarray(st["time"].values, float)
+    if cycle is not None:
+        tol = 1e-9 * max(float(np.ptp(t)), abs(float(t[-1])), 1e-300)
+        st = st.isel(time=np.flatnonzero((t >= cycle[0] - tol) & (t <= cycle[1] + tol)))
+    n = st.sizes["time"]
+    if n < 2:
+        where = "" if cycle is None else \
+            f"the cycle [{cycle[0]:g} s, {cycle[1]:g} s] holds "
+        raise ValueError(f"{where}{n} of the {t.size} instant(s) computed ({t[0]:g} s to "
+                         f"{t[-1]:g} s): a fatigue criterion needs at least 2 instants of "
+                         "the cycle")
+    return st
+
+
+def _finish(tmp: pathlib.Path, spec: StressSpec, cycle) -> None:
+    """Add to the stress file ``tmp`` its von Mises peak and, with a criterion, the
+    criterion's fields over (x3, x1, x2) over the instants of ``cycle`` (t_start, t_end)
+    [s] (None: all), read back one depth at a time."""
+    with open_stress(tmp, chunks={"time": -1, "x3": 1}) as st:
+        attrs = _peak(st)
+        fields = None
+        if spec.criterion is not None:
+            fi = fatigue(_cycle(st, cycle), spec.criterion, **dict(spec.constants))
+            attrs.update({k: fi.attrs[k] for k in ("criterion", "criterion_field",
+                                                   "constants", "cycle")})
+            fields = fi.drop_vars(list(fi.coords))
+    if fields is None:
+        fields = xr.Dataset()
+    fields.attrs = attrs
+    enc = {v: {"zlib": True, "complevel": 1, "_FillValue": None}
+           for v in fields.data_vars if fields[v].ndim}
+    fields.to_netcdf(tmp, mode="a", engine="netcdf4", encoding=enc)
+
+
+def write_stress_product(archive, target, spec: StressSpec) -> dict:
+    """Compute the ``[stress]`` product of one archive and write it to ``target``.
+
+    The stress over (time, x3, x1, x2) (:func:`contactpipe.subsurface_stress`, streamed
+    block by block from the lazily opened archive: bounded memory) and, when ``spec``
+    names a criterion, its fields over (x3, x1, x2) (:func:`contactpipe.fatigue` over the
+    instants of ``spec.cycle`` or ``spec.cycle_norm``, read back one depth at a time) in
+    one netCDF file,
+    written atomically, with the attributes :data:`SETTINGS_ATTR` (the settings as
+    JSON), :data:`DIGEST_ATTR` (their digest) and the largest von Mises stress and where
+    it is. The work runs on dask's synchronous scheduler (one block in memory at a time,
+    and never on a distributed client the process may hold), with small HDF5 chunk caches
+    (:data:`CHUNK_CACHE_BYTES`): the memory is about one block of
+    :data:`contactpipe.stress.BLOCK_BYTES` and one depth of the criterion's history,
+    whatever the size of the archive.
+
+    Returns
+    -------
+    dict
+        :func:`product_record` of the file written.
+
+    Raises
+    ------
+    ValueError
+        A time not in the archive, a rigid body, a cycle holding fewer than 2 instants.
+    ArchiveError
+        Not an archive, tractions holding NaN, the write failed. Nothing is left at
+        ``target`` but what was there before.
+    """
+    target = pathlib.Path(target)
+    time = {"last": None, "all": "all"}[spec.time] if isinstance(spec.time, str) else \
+        list(spec.time)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with dask.config.set(scheduler="synchronous"), _small_chunk_cache(), \
+            open_archive(archive) as ds:
+        st = subsurface_stress(ds, list(spec.depths), body=spec.body, time=time)
+        st.attrs[SETTINGS_ATTR] = json.dumps(spec.settings(), sort_keys=True)
+        st.attrs[DIGEST_ATTR] = spec.digest()
+        cycle = spec.cycle
+        if spec.cycle_norm is not None:            # t_norm of the archive -> seconds
+            t = np.asarray(ds["time"].values, float)
+            cycle = tuple(float(t[0] + f * (t[-1] - t[0])) for f in spec.cycle_norm)
+        with atomic_path(target) as tmp:
+            save_stress(st, tmp, precision=spec.precision)
+            _finish(tmp, spec, cycle)
+    return product_record(target)
+
+
+def product_record(path) -> dict:
+    """What the summary says of a ``[stress]`` product: its path, settings digest,
+    sizes, largest von Mises stress and where, and the criterion's maximum and where.
+
+    Raises
+    ------
+    ArchiveError
+        Not a complete stress file.
+    """
+    with open_stress(path) as st:
+        a = st.attrs
+        rec = {"path": str(path), "settings_digest": a.get(DIGEST_ATTR),
+               "body": a.get("body"), "instants": st.sizes["time"], "depths": st.sizes["x3"]}
+        rec.update({k: float(a[k]) for k in PEAK_ATTRS if k in a})
+        if "criterion" in a and "maximum" in st:
+            rec["criterion"] = a["criterion"]
+            rec["criterion_field"] = a.get("criterion_field")
+            rec.update({f"criterion_{k}": float(st[k].values)
+                        for k in ("maximum", "maximum_x3", "maximum_x1", "maximum_x2")})
+    return rec
+
+
+def stored_digest(path) -> str | None:
+    """The settings digest a ``[stress]`` product was made with (None: no product, or not
+    a complete stress file)."""
+    try:
+        with open_stress(path) as st:
+            return st.attrs.get(DIGEST_ATTR)
+    except (ArchiveError, OSError):
+        return None
