@@ -175,14 +175,15 @@ SWEEP = {"base": "scene.toml", "mode": "zip", "axes": {"friction.mu": [0.1, 0.2]
          "dask": {"scheduler": "synchronous", "n_workers": 2}}
 PIPELINE = {"name": "p", "out": "runs", "sweep": {"file": "sweep.toml"},
             "compare": {"reference": "none"}, "plot": {"figures": ["profiles"]},
-            "dask": {"n_workers": 2}}
+            "dask": {"n_workers": 2}, "stress": {"depths": [0.0, 1e-4]}}
 #: (file kind, dotted path of a table, its fields, the file's dict)
 FILE_TABLES = [("sweep", "", config.SWEEP_FIELDS, SWEEP),
                ("sweep", "dask", config.DASK_FIELDS, SWEEP),
                ("pipeline", "", config.PIPELINE_FIELDS, PIPELINE),
                ("pipeline", "compare", config.COMPARE_FIELDS, PIPELINE),
                ("pipeline", "plot", config.PLOT_FIELDS, PIPELINE),
-               ("pipeline", "dask", config.DASK_FIELDS, PIPELINE)]
+               ("pipeline", "dask", config.DASK_FIELDS, PIPELINE),
+               ("pipeline", "stress", config.STRESS_FIELDS, PIPELINE)]
 
 
 def test_the_bases_are_valid():
