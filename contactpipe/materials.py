@@ -1,10 +1,16 @@
 """Bodies and their constitutive laws: rigid, elastic, linear viscoelastic.
 
-A viscoelastic body has a constant Poisson ratio, so its creep function factors as
-``Phi(t) = (1 + nu) / E * phi(t)`` (paper eq. 9), where ``E`` is the *instantaneous*
+By default a viscoelastic body has a constant Poisson ratio, so its creep function factors
+as ``Phi(t) = (1 + nu) / E * phi(t)`` (paper eq. 9), where ``E`` is the *instantaneous*
 (glassy) Young modulus and ``phi`` the normalised creep function (phi(0) = 1).  The one
 exception is Kelvin-Voigt, which has no instantaneous elasticity: there ``E`` is the
 long-term modulus and phi(t) = 1 - exp(-t/tau) starts at zero.
+
+With ``bulk = "elastic"`` (:class:`Body`) phi is the shear creep compliance instead,
+J(t) = phi(t)/G, while the bulk modulus K = E/(3(1 - 2 nu)) keeps the value it has where
+phi = 1: the Poisson ratio then varies in time (towards 1/2 as the shear modulus relaxes),
+and the influence coefficients split into parts with their own creep functions
+(:func:`elastic_bulk_parts`).
 
 Every normalised creep function here has the form
 
@@ -21,7 +27,9 @@ Units: moduli [Pa], times [s]; phi is dimensionless.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -29,6 +37,8 @@ __all__ = [
     "ExponentialCreep", "TabulatedCreep", "ELASTIC", "maxwell", "kelvin_voigt", "zener",
     "prony", "Body", "dundurs_beta", "composite_modulus", "step_start_stable_step",
     "PronyFit", "fit_creep_compliance", "fit_relaxation_modulus", "fit_dynamic_moduli",
+    "combine", "relaxation_from_creep", "bulk_ratio", "elastic_bulk_parts", "BULK",
+    "TABLE_KINDS", "read_table_file", "fit_table_file", "table_time_span",
 ]
 
 
@@ -266,6 +276,179 @@ def step_start_stable_step(creep) -> float:
     while excess(hi) < 0.0:
         hi *= 2.0
     return float(brentq(excess, lo, hi, xtol=1e-15 * hi, rtol=1e-15))
+
+
+# --------------------------------------------------------------------------- nu(t)
+def combine(terms, name="combined") -> ExponentialCreep:
+    """The linear combination sum_k w_k f_k of exponential creep functions, terms of equal
+    time constant merged and exactly cancelling ones dropped.
+
+    Parameters
+    ----------
+    terms : sequence of (float, ExponentialCreep)
+        Weights [1] and functions.
+    name : str
+        The result's name.
+    """
+    a = b = 0.0
+    merged = {}
+    for w, f in terms:
+        a += w * f.a
+        b += w * f.b
+        for di, ti in zip(f.d, f.tau):
+            merged[ti] = merged.get(ti, 0.0) + w * di
+    keep = [(ti, di) for ti, di in merged.items() if di != 0.0]
+    out = ExponentialCreep(a=a, b=b, d=tuple(di for _, di in keep),
+                           tau=tuple(ti for ti, _ in keep), name=name)
+    if all(f.phi0 == 0.0 for w, f in terms if w != 0.0):
+        out = _zero_at_origin(out)
+    return out
+
+
+def _zero_at_origin(creep: ExponentialCreep) -> ExponentialCreep:
+    """``creep`` with its last amplitude corrected for the rounding of phi(0), which is 0
+    in exact arithmetic (a combination of functions without instantaneous compliance): a weight of
+    1e-17 would otherwise stand for a rigid instant."""
+    if not creep.d:
+        return replace(creep, a=0.0)
+    partial = creep.a                        # phi(0) summed as __call__ sums it
+    for di in creep.d[:-1]:
+        partial = partial + di
+    return replace(creep, d=creep.d[:-1] + (-partial,))
+
+
+def relaxation_from_creep(creep: ExponentialCreep, extra: float = 0.0) -> ExponentialCreep:
+    """The relaxation function of the creep function phi + ``extra``, exactly.
+
+    r(t) solves int_{0-}^t r(t - s) d(phi + extra)(s) = 1 (in Carson transforms
+    s L[r](s) = 1/psi(s), psi(s) = phi0 + extra + b/s + sum_i c_i/(1 + s tau_i) with
+    c_i = -d_i >= 0). The zeros of psi on the negative real axis, s_j = -1/lambda_j, lie
+    one between consecutive poles -1/tau_i, one beyond the last and one in
+    (-1/tau_max, 0) with a dashpot (b > 0), so
+
+        r(t) = r_inf + sum_j r_j exp(-t/lambda_j),   r_j = 1/(s_j psi'(s_j)) > 0,
+
+    r_inf = 1/(phi(inf) + extra) (0 with a dashpot) and r(0) = 1/(phi0 + extra). Without
+    instantaneous compliance (phi0 + extra = 0: Kelvin-Voigt) 1/psi grows like
+    s/phi'(0): the relaxation function is then delta(t)/phi'(0) plus the regular part
+    returned (no zero beyond the last pole; r_inf and r_j as above).
+
+    Parameters
+    ----------
+    creep : ExponentialCreep
+        phi [1] with b >= 0 and c_i >= 0.
+    extra : float
+        A constant compliance added to phi [1], >= 0.
+
+    Returns
+    -------
+    ExponentialCreep
+        r [1] (a decreasing function: a = r_inf, d = (r_j), tau = (lambda_j)).
+
+    Raises
+    ------
+    ValueError
+        A decreasing term, or phi0 + extra < 0, or phi = 0.
+    """
+    from scipy.optimize import brentq           # heavy; only nu(t) bodies need it
+
+    c = -np.asarray(creep.d, dtype=float)
+    tau = np.asarray(creep.tau, dtype=float)
+    b = float(creep.b)
+    a0 = float(creep.phi0) + float(extra)
+    if b < 0 or np.any(c < 0) or not a0 >= 0 or (a0 == 0 and b == 0 and not np.any(c > 0)):
+        raise ValueError(f"relaxation function: need b >= 0, c_i >= 0, phi(0) + extra "
+                         f">= 0 and phi not 0, got b = {b:g}, c = {c.tolist()}, {a0:g}")
+    keep = c > 0
+    c, tau = c[keep], tau[keep]
+    order = np.argsort(1.0 / tau)
+    c, tau = c[order], tau[order]
+    poles = 1.0 / tau                            # x = -s = 1/tau_i, ascending
+
+    def psi(x):                                  # psi(-x)
+        return a0 - (b / x if b else 0.0) + float(np.sum(c / (1.0 - x * tau)))
+
+    def slope(x):                                # -psi'(s) at s = -x, > 0
+        return (b / x ** 2 if b else 0.0) + float(np.sum(c * tau / (1.0 - x * tau) ** 2))
+
+    edges = list(poles)
+    brackets = list(zip(edges[:-1], edges[1:]))
+    if edges and a0 > 0:                         # psi -> a0 beyond the last pole
+        brackets.append((edges[-1], np.inf))
+    if b > 0 and (edges or a0 > 0):
+        brackets.insert(0, (0.0, edges[0] if edges else np.inf))
+    lam, rj = [], []
+    for lo, hi in brackets:
+        if np.isinf(hi):
+            hi = 2.0 * max(lo, b / a0)
+            while psi(hi) <= 0:
+                hi *= 2.0
+        else:
+            hi = hi - 1e-12 * (hi - lo)
+        if lo == 0.0:
+            lo = 1e-9 * b / (a0 + c.sum())       # psi < 0 there (the dashpot dominates)
+        else:
+            lo = lo + 1e-12 * (hi - lo)
+        x = brentq(psi, lo, hi, xtol=1e-300, rtol=1e-15, maxiter=500)
+        lam.append(1.0 / x)
+        rj.append(1.0 / (x * slope(x)))
+    r_inf = 0.0 if b > 0 else 1.0 / (a0 + c.sum())
+    return ExponentialCreep(a=float(r_inf), d=tuple(float(x) for x in rj),
+                            tau=tuple(float(x) for x in lam), name="relaxation")
+
+
+def bulk_ratio(poisson: float) -> float:
+    """kappa = G/K = 3 (1 - 2 nu) / (2 (1 + nu)) [1]: 0 for an incompressible body."""
+    return 3.0 * (1.0 - 2.0 * poisson) / (2.0 * (1.0 + poisson))
+
+
+@lru_cache(maxsize=64)
+def elastic_bulk_parts(creep: ExponentialCreep, poisson: float):
+    """The creep functions of a body whose shear compliance creeps and bulk does not.
+
+    The shear compliance is J(t) = phi(t)/G and the bulk modulus K is constant, with G,
+    K the moduli where phi = 1 (Young modulus E, Poisson ratio nu: G = E/(2(1 + nu)),
+    K = E/(3(1 - 2 nu)), kappa = G/K). Every influence coefficient is a combination of two
+    compliances (:func:`contactpipe.solver.influence.body_kernel_parts`): 1/G and nu/G.
+    By the correspondence principle, with Carson transforms (^) and
+    nu^ = (3K - 2G^)/(2(3K + G^)),
+
+        (nu/G)^ = J^/2 - 1/(2K) + (1/(2K)) / (1 + 3K J^),
+
+    whose last term is the relaxation function of the compliance J + 1/(3K)
+    (:func:`relaxation_from_creep`). Normalised by 1/G:
+
+        phi_shear = phi,    phi_poisson = phi/2 - kappa/2 + kappa^2 r(t)/6,
+
+    r the relaxation function of phi + kappa/3; phi_poisson = nu where phi = 1. The
+    normal compliance (1 - nu)/G is phi_shear - phi_poisson and the coupling compliance
+    (1 - 2 nu)/G is phi_shear - 2 phi_poisson = kappa - kappa^2 r/3: both creep functions
+    with non-negative terms; the coupling one is bounded by kappa (1/K).
+
+    Parameters
+    ----------
+    creep : ExponentialCreep
+        phi [1], the normalised shear creep function.
+    poisson : float
+        nu [1] where phi = 1 (t = 0, or t = inf for phi(0) = 0), in [0, 0.5].
+
+    Returns
+    -------
+    (ExponentialCreep, ExponentialCreep)
+        phi_shear, phi_poisson [1].
+    """
+    if not isinstance(creep, ExponentialCreep):
+        raise ValueError("bulk = 'elastic' needs a creep function of exponentials "
+                         "(maxwell, kelvin_voigt, zener, prony, fit), not a table")
+    kappa = bulk_ratio(poisson)
+    if kappa == 0.0:
+        return creep, combine([(0.5, creep)], "poisson_part")
+    r = relaxation_from_creep(creep, kappa / 3.0)
+    part = combine([(0.5, creep), (kappa ** 2 / 6.0, r),
+                    (-kappa / 2.0, ExponentialCreep())], "poisson_part")
+    if creep.phi0 == 0.0:       # phi_poisson(0) = 0 exactly: kappa^2 r(0)/6 = kappa/2
+        part = _zero_at_origin(part)
+    return creep, part
 
 
 # --------------------------------------------------------------------------- fitting
@@ -592,6 +775,109 @@ def fit_dynamic_moduli(frequency, storage, loss, *, terms_per_decade=2, times=No
     return _fit_result(creep, young, a @ c, data, tau, "dynamic")
 
 
+# --------------------------------------------------------------------------- table files
+#: What a material table file holds (``table_kind``): its columns and the fit it gets.
+TABLE_KINDS = {
+    "creep": ("time [s], creep compliance [1/Pa]", 2),
+    "relaxation": ("time [s], relaxation modulus [Pa]", 2),
+    "dynamic": ("frequency [Hz], storage modulus [Pa], loss modulus [Pa]", 3),
+}
+
+
+def read_table_file(path, kind: str) -> np.ndarray:
+    """The columns of a material table file: text or CSV, one row per line, numbers
+    separated by commas, semicolons, tabs or spaces; blank lines, lines starting with
+    ``#`` and one header line of words at the top are skipped.
+
+    Parameters
+    ----------
+    path : str
+        The file.
+    kind : {"creep", "relaxation", "dynamic"}
+        What it holds (:data:`TABLE_KINDS`): 2, 2 and 3 columns.
+
+    Returns
+    -------
+    ndarray (columns, rows)
+
+    Raises
+    ------
+    ValueError
+        Unreadable, or a row that is not that many numbers (naming the line).
+    """
+    what, ncol = TABLE_KINDS[kind]
+    try:
+        with open(path, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except (OSError, UnicodeDecodeError) as e:
+        raise ValueError(f"cannot read {path}: {getattr(e, 'strerror', None) or e}") from None
+    rows, header_ok = [], True
+    for number, line in enumerate(lines, start=1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        items = text.replace(",", " ").replace(";", " ").split()
+        try:
+            values = [float(x) for x in items]
+        except ValueError:
+            if header_ok and not rows:
+                header_ok = False                  # one header line of column names
+                continue
+            raise ValueError(f"{path}, line {number}: {text[:60]!r} is not {ncol} numbers "
+                             f"({what})") from None
+        if len(values) != ncol:
+            raise ValueError(f"{path}, line {number}: {len(values)} columns, expected "
+                             f"{ncol} ({what})")
+        rows.append(values)
+    if not rows:
+        raise ValueError(f"{path}: no rows of numbers ({what})")
+    return np.array(rows, dtype=float).T
+
+
+@lru_cache(maxsize=32)
+def _fit_file_cached(path, kind, stamp):
+    cols = read_table_file(path, kind)
+    if kind == "creep":
+        return fit_creep_compliance(cols[0], cols[1])
+    if kind == "relaxation":
+        return fit_relaxation_modulus(cols[0], cols[1])
+    return fit_dynamic_moduli(cols[0], cols[1], cols[2])
+
+
+def fit_table_file(path, kind: str) -> PronyFit:
+    """The Prony fit of a material table file (:func:`read_table_file`) by
+    :func:`fit_creep_compliance`, :func:`fit_relaxation_modulus` or
+    :func:`fit_dynamic_moduli`; cached while the file is unchanged.
+
+    Raises
+    ------
+    ValueError
+        The file cannot be read, or its data or the fit are refused (not positive, not
+        monotone).
+    """
+    if kind not in TABLE_KINDS:
+        raise ValueError(f"table kind {kind!r}: allowed {', '.join(TABLE_KINDS)}")
+    try:
+        st = os.stat(path)
+    except OSError as e:
+        raise ValueError(f"cannot read {path}: {e.strerror}") from None
+    return _fit_file_cached(os.fspath(path), kind, (st.st_mtime_ns, st.st_size))
+
+
+def table_time_span(path, kind: str) -> float:
+    """The time [s] up to which a table file's data reach: its last time (creep or
+    relaxation), or 1/(2 pi f_min) (dynamic: the longest relaxation time it resolves)."""
+    cols = read_table_file(path, kind)
+    if kind == "dynamic":
+        return float(1.0 / (2.0 * np.pi * cols[0].min()))
+    return float(cols[0].max())
+
+
+#: How a viscoelastic body's bulk modulus behaves: "creep" (it creeps with the shear
+#: modulus, the same phi: a constant Poisson ratio, paper eq. 9) or "elastic".
+BULK = ("creep", "elastic")
+
+
 @dataclass(frozen=True)
 class Body:
     """One contacting body.
@@ -603,15 +889,20 @@ class Body:
         Young modulus [Pa]; the instantaneous (glassy) one for a viscoelastic body,
         except Kelvin-Voigt where it is the long-term modulus. Unused when rigid.
     poisson : float
-        Poisson ratio [1], in [0, 0.5].
+        Poisson ratio [1], in [0, 0.5]; with ``bulk = "elastic"`` its value where phi = 1.
     creep : ExponentialCreep or TabulatedCreep
         Normalised creep function phi(t); :data:`ELASTIC` for elastic or rigid bodies.
+    bulk : {"creep", "elastic"}
+        "creep" (default): every compliance creeps with phi, nu is constant (paper
+        eq. 9). "elastic": phi is the shear compliance J(t)/J at phi = 1, the bulk
+        modulus E/(3(1 - 2 nu)) does not creep, nu(t) varies (:func:`elastic_bulk_parts`).
     """
 
     kind: str = "elastic"
     young: float = np.inf
     poisson: float = 0.3
     creep: object = field(default=ELASTIC)
+    bulk: str = "creep"
 
     @property
     def rigid(self) -> bool:
@@ -620,6 +911,49 @@ class Body:
     @property
     def has_memory(self) -> bool:
         return self.kind == "viscoelastic" and not self.creep.is_elastic
+
+    @property
+    def split(self) -> bool:
+        """True when the Poisson ratio varies in time: the kernels split into a shear part
+        and a Poisson part with their own creep functions (:attr:`part_creeps`)."""
+        return self.has_memory and self.bulk == "elastic" and self.poisson < 0.5
+
+    @property
+    def part_creeps(self) -> tuple:
+        """The normalised creep functions of the body's kernel parts [1]: (phi,) for a
+        constant Poisson ratio (one kernel set, :func:`~contactpipe.solver.influence.body_kernels`),
+        (phi_shear, phi_poisson) when :attr:`split`
+        (:func:`~contactpipe.solver.influence.body_kernel_parts`)."""
+        if self.split:
+            return elastic_bulk_parts(self.creep, float(self.poisson))
+        return (self.creep,)
+
+    @property
+    def normal_creep(self):
+        """The normal compliance (1 - nu)/G as a creep function, normalised by its value
+        where phi = 1 [1]: phi itself for a constant Poisson ratio. A rigid sphere's
+        normal contact (Lee-Radok) depends on this function alone."""
+        if not self.split:
+            return self.creep
+        shear, part = self.part_creeps
+        return combine([(1.0 / (1.0 - self.poisson), shear),
+                        (-1.0 / (1.0 - self.poisson), part)], "normal")
+
+    @property
+    def coupling_creep(self):
+        """The coupling compliance (1 - 2 nu)/G as a creep function, normalised like
+        :attr:`normal_creep` [1] (phi for a constant Poisson ratio)."""
+        if not self.split:
+            return self.creep
+        shear, part = self.part_creeps
+        w = 1.0 / (1.0 - 2.0 * self.poisson)
+        return combine([(w, shear), (-2.0 * w, part)], "coupling")
+
+    @property
+    def rule_creeps(self) -> tuple:
+        """The compliances a time rule must integrate well [1]: phi, and with a varying
+        Poisson ratio the normal compliance too."""
+        return (self.creep, self.normal_creep) if self.split else (self.creep,)
 
     @property
     def shear_modulus(self) -> float:
