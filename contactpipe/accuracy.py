@@ -1,9 +1,11 @@
 """Accuracy presets: choose the grid and the time steps for an error target.
 
 A scene may ask for ``solver.accuracy = "fast" | "balanced" | "accurate"``; the grid
-points and the number of time steps are then chosen here (the values written in the scene
-file for ``grid.points`` and ``time.steps`` are replaced, and the archive records the
-choice in its attributes and its ``scene`` text). Each preset is a number of cells across
+points, the number of time steps and the frictional preload's sub-steps are then chosen
+here (the values written in the scene file for ``grid.points``, ``time.steps`` and
+``solver.preload_substeps`` are replaced, the last by "auto" with the preset's target:
+:func:`choose_preload`; the archive records the choice in its attributes and its
+``scene`` text). Each preset is a number of cells across
 the largest contact diameter of the window, a number of steps per loading cycle of the
 tangential program, and a number of steps per relaxation (retardation) time of the
 viscoelastic bodies. The numbers come from the speed-accuracy study
@@ -20,7 +22,8 @@ import numpy as np
 from .exceptions import SceneError
 from .scene_parts import MAX_POINTS, MAX_STEPS, MIN_POINTS, knot_steps
 
-__all__ = ["PRESETS", "Preset", "resolve_accuracy", "knot_multiple"]
+__all__ = ["PRESETS", "Preset", "resolve_accuracy", "knot_multiple", "preload_fractions",
+           "preload_error", "choose_preload", "PRELOAD_TARGET", "PRELOAD_AUTO_MAX"]
 
 #: The largest step count :func:`knot_multiple` looks for.
 MAX_KNOT_MULTIPLE = 100_000
@@ -125,7 +128,7 @@ def resolve_accuracy(scene):
                          f"{pre.steps_per_relaxation} per relaxation time), above the cap "
                          f"of {MAX_STEPS}; give time.steps, or a shorter load window")
     steps = _on_knots(scene, int(math.ceil(want)))
-    changes = {"grid.points": points}
+    changes = {"grid.points": points, "solver.preload_substeps": "auto"}
     if knots > 0:
         changes["time.steps"] = steps
     resolved = scene.replace(changes)
@@ -133,3 +136,87 @@ def resolve_accuracy(scene):
             f"({pre.cells_across_contact} across the largest contact), "
             f"{steps} steps")
     return resolved, note
+
+
+# --------------------------------------------------------------------------- preload path
+#: Error target of ``solver.preload_substeps = "auto"`` without an accuracy preset [1].
+PRELOAD_TARGET = 0.01
+#: The most sub-steps ``"auto"`` takes.
+PRELOAD_AUTO_MAX = 1024
+
+
+def preload_fractions(n: int) -> np.ndarray:
+    """The load fractions of a preload in ``n`` sub-steps, (k/n)^2 for k = 1..n.
+
+    Under a growing load the contact radius grows like W^(1/3): uniform fractions give the
+    first sub-step half the final radius and converge slowly; squared fractions spread
+    the growth of the radius (measured at 32^2 and 64^2, rigid sphere on Maxwell,
+    nu = 0.3: the q field 2-4 times closer to a 1024-sub-step path than uniform fractions
+    at 8-128 sub-steps, about first order; docs/time-integration.md)."""
+    k = np.arange(1, int(n) + 1, dtype=float)
+    return (k / float(n)) ** 2
+
+
+def preload_error(coarse, fine, m_coarse, m_fine, n, mu):
+    """The estimated error of the q field after an ``n``-sub-step preload, from the paths
+    of ``m_coarse`` and ``m_fine`` sub-steps (each (q, p), or None), assuming an error C/m:
+    C = |q_fine - q_coarse| / (1/m_coarse - 1/m_fine), error C/n. The norm is the rms over
+    the cells in contact in either path of |q| (both components), over mu p_max [1];
+    None without both paths or without contact. Measured to over-estimate the error
+    against a 1024-sub-step path by 1.1-3 times (docs/time-integration.md)."""
+    if coarse is None or fine is None:
+        return None
+    (q0, p0), (q1, p1) = coarse, fine
+    contact = (p0 > 0) | (p1 > 0)
+    scale = float(np.max(mu * p1))
+    if not contact.any() or scale <= 0:
+        return None
+    diff = np.sqrt(np.mean(np.sum((q1 - q0) ** 2, axis=0)[contact]))
+    return float(diff / (1.0 / m_coarse - 1.0 / m_fine) / n / scale)
+
+
+def choose_preload(setting, path, mu, target=PRELOAD_TARGET):
+    """The sub-step count of a frictional preload and the estimated error of its q field.
+
+    Parameters
+    ----------
+    setting : int or "auto"
+        ``solver.preload_substeps``: a count n, or "auto": n doubles from 8 until the
+        estimate is within ``target``, at most :data:`PRELOAD_AUTO_MAX`.
+    path : callable
+        ``path(m)`` -> (q, p) after a preload in m sub-steps from the unloaded state [Pa],
+        or None when it does not converge.
+    mu : float or ndarray
+        Friction coefficient [1].
+    target : float
+        The error target of "auto" [1].
+
+    Returns
+    -------
+    (int, float or None)
+        n, and the error of its q field estimated from the paths of n/4 and n/2
+        sub-steps (:func:`preload_error`; None for n < 4 or a path that does not
+        converge). Cost: the paths of n/4 and n/2 (explicit n), of 2, 4, ..., n/2
+        ("auto"), on top of the run's own.
+    """
+    paths = {}
+
+    def get(m):
+        if m not in paths:
+            paths[m] = path(m)
+        return paths[m]
+
+    if setting == "auto":
+        n = PRELOAD_AUTO_MAX
+        m = 4
+        while 2 * m <= PRELOAD_AUTO_MAX:
+            est = preload_error(get(m // 2), get(m), m // 2, m, 2 * m, mu)
+            if est is not None and est <= target:
+                n = 2 * m
+                break
+            m *= 2
+    else:
+        n = int(setting)
+    if n < 4:
+        return n, None
+    return n, preload_error(get(n // 4), get(n // 2), n // 4, n // 2, n, mu)

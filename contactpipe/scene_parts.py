@@ -798,8 +798,10 @@ class Solver(Part):
         Tangential model: chosen from the scene, q2 = 0 (Cattaneo-Mindlin), or both.
     max_coupling_passes : int
         Cap on the normal <-> tangential passes of the middle loop, >= 1.
-    preload_substeps : int
-        Substeps of the normal preload, from 1 to 10 000.
+    preload_substeps : int or "auto"
+        Sub-steps of a frictional preload (graded, finer where the contact grows fastest),
+        from 1 to 10 000, or "auto": as many as the accuracy target asks for
+        (``accuracy``'s, else 1 %; docs/time-integration.md).
     fft : {"auto", "pyfftw", "scipy"}
     threads : int
         FFT threads, from 1 to 1024.
@@ -814,7 +816,7 @@ class Solver(Part):
     time_rule: str = "auto"
     tangential: str = "auto"
     max_coupling_passes: int = 100
-    preload_substeps: int = 8
+    preload_substeps: int | str = 8
     fft: str = "auto"
     threads: int = 1
     accuracy: str | None = None
@@ -827,8 +829,8 @@ class Solver(Part):
         Field("time_rule", "choice", options=TIME_RULES, default="auto"),
         Field("tangential", "choice", options=TANGENTIAL_MODELS, default="auto"),
         Field("max_coupling_passes", "integer", _AT_LEAST_1, ok=_at_least_1, default=100),
-        Field("preload_substeps", "integer", _AT_LEAST_1, ok=_at_least_1, default=8,
-              cap=MAX_PRELOAD_SUBSTEPS,
+        Field("preload_substeps", "integer", "an integer >= 1, or 'auto'", ok=_at_least_1,
+              default=8, options=("auto",), cap=MAX_PRELOAD_SUBSTEPS,
               cap_why="the preload needs a few substeps; the default is 8"),
         Field("fft", "choice", options=FFT_BACKENDS, default="auto"),
         Field("threads", "integer", _AT_LEAST_1, ok=_at_least_1, default=1,

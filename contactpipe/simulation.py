@@ -34,7 +34,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .accuracy import knot_multiple, resolve_accuracy
+from .accuracy import (PRELOAD_TARGET, PRESETS, choose_preload, knot_multiple,
+                       preload_fractions, resolve_accuracy)
 from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
 from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
                          OutputPathError, SceneError, one_line)
@@ -262,6 +263,7 @@ class _Problem:
             #: the time rule each body's memory applies ("auto" resolved), None without one
             self.rules = [None if m is None else m.rule for m in fresh]
         self._check_finite(d1, d2)
+        self._preload, self._trial = None, None       # see preload()
 
     def operator(self, weights) -> ContactOperator:
         """The operator of an instant whose traction has the creep weights ``weights``
@@ -343,12 +345,57 @@ class _Problem:
                     f"relaxation times, load.normal_force and the grid")
 
     def fractions(self, first, T):
-        """The sub-steps of an instant: those of a frictional preload at t0, else one."""
+        """The sub-steps of an instant: those of a frictional preload at t0
+        (:func:`preload_fractions`, their count from :meth:`preload`), else one."""
         pl = self.plan
         if first and self.tang and pl.preload == "frictional" and \
                 (pl.coupling != "none" or np.any(T)):
-            return np.linspace(0.0, 1.0, int(self.scene.solver.preload_substeps) + 1)[1:]
+            n = self._trial if self._trial is not None else self.preload()["substeps"]
+            return preload_fractions(n)
         return np.array([1.0])
+
+    def _preload_active(self) -> bool:
+        pl = self.plan
+        return bool(self.tang and pl.preload == "frictional" and self.t.size > 0 and
+                    (pl.coupling != "none" or self.T1[0] != 0 or self.T2[0] != 0))
+
+    def preload(self) -> dict:
+        """The frictional preload's sub-step count and its estimated error (cached;
+        :func:`contactpipe.accuracy.choose_preload`). The preload path at t0 starts from
+        the unloaded state without history, so it is known before the march: coarser
+        paths run on a scratch state (:meth:`_preload_path`).
+
+        Returns
+        -------
+        dict
+            ``substeps`` (0 without a frictional preload), ``error`` (estimated rms error
+            of the q field over the contact, over mu p_max [1], or None), ``pairs`` (the
+            FFT pairs the coarser paths cost).
+        """
+        if self._preload is None:
+            pairs0 = self.conv.pairs
+            n, est = 0, None
+            if self._preload_active():
+                acc = self.scene.solver.accuracy
+                target = PRESETS[acc].target if acc in PRESETS else PRELOAD_TARGET
+                n, est = choose_preload(self.scene.solver.preload_substeps,
+                                        self._preload_path, self.mu, target)
+            self._preload = {"substeps": n, "error": est,
+                             "pairs": int(self.conv.pairs - pairs0)}
+        return self._preload
+
+    def _preload_path(self, substeps):
+        """(q, p) after a frictional preload in ``substeps`` sub-steps on a scratch state,
+        or None when it does not converge."""
+        self._trial = int(substeps)
+        try:
+            st = State.initial(self.shape, self.new_memories())
+            _step(self, st, 0)
+            return st.q.copy(), st.p.copy()
+        except ConvergenceError:
+            return None
+        finally:
+            self._trial = None
 
     def sub_plan(self, first):
         """The paper's initial frictionless normal solve at t0, then shear from there."""
@@ -400,6 +447,12 @@ class _Problem:
         if accuracy_note:
             out["accuracy"] = accuracy_note
         out.update(self._material_attrs())
+        pre = self.preload()
+        if pre["substeps"]:
+            out["preload_substeps"] = pre["substeps"]
+            out["preload_estimate_fft_pairs"] = pre["pairs"]
+            if pre["error"] is not None:
+                out["preload_error_estimate"] = pre["error"]
         return out
 
     def _material_attrs(self) -> dict:
