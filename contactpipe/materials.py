@@ -805,14 +805,21 @@ def read_table_file(path, kind: str) -> np.ndarray:
     ValueError
         Unreadable, or a row that is not that many numbers (naming the line).
     """
-    what, ncol = TABLE_KINDS[kind]
+    return _parse_table(_read_text(path), path, kind)
+
+
+def _read_text(path) -> str:
     try:
         with open(path, encoding="utf-8") as f:
-            lines = f.read().splitlines()
+            return f.read()
     except (OSError, UnicodeDecodeError) as e:
         raise ValueError(f"cannot read {path}: {getattr(e, 'strerror', None) or e}") from None
+
+
+def _parse_table(text, path, kind) -> np.ndarray:
+    what, ncol = TABLE_KINDS[kind]
     rows, header_ok = [], True
-    for number, line in enumerate(lines, start=1):
+    for number, line in enumerate(text.splitlines(), start=1):
         text = line.strip()
         if not text or text.startswith("#"):
             continue
@@ -835,8 +842,8 @@ def read_table_file(path, kind: str) -> np.ndarray:
 
 
 @lru_cache(maxsize=32)
-def _fit_file_cached(path, kind, stamp):
-    cols = read_table_file(path, kind)
+def _fit_text_cached(text, path, kind):
+    cols = _parse_table(text, path, kind)
     if kind == "creep":
         return fit_creep_compliance(cols[0], cols[1])
     if kind == "relaxation":
@@ -847,7 +854,7 @@ def _fit_file_cached(path, kind, stamp):
 def fit_table_file(path, kind: str) -> PronyFit:
     """The Prony fit of a material table file (:func:`read_table_file`) by
     :func:`fit_creep_compliance`, :func:`fit_relaxation_modulus` or
-    :func:`fit_dynamic_moduli`; cached while the file is unchanged.
+    :func:`fit_dynamic_moduli`; cached by the file's content.
 
     Raises
     ------
@@ -857,11 +864,7 @@ def fit_table_file(path, kind: str) -> PronyFit:
     """
     if kind not in TABLE_KINDS:
         raise ValueError(f"table kind {kind!r}: allowed {', '.join(TABLE_KINDS)}")
-    try:
-        st = os.stat(path)
-    except OSError as e:
-        raise ValueError(f"cannot read {path}: {e.strerror}") from None
-    return _fit_file_cached(os.fspath(path), kind, (st.st_mtime_ns, st.st_size))
+    return _fit_text_cached(_read_text(path), os.fspath(path), kind)
 
 
 def table_time_span(path, kind: str) -> float:
