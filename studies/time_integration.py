@@ -229,21 +229,11 @@ def lee_radok_scene(law, n, steps, size="auto"):
                     solver={"time_rule": "linear", "tolerance": 1e-10})
 
 
-def kelvin_voigt_pressure(r, t, tau=1.0):
-    """Lee-Radok pressure [Pa], Kelvin-Voigt (E the long-term modulus):
-    p = 2E/(pi R (1 - nu^2)) (h + tau dh/dt), h = sqrt(a^2 - r^2)."""
-    a_inf3 = 3 * W * R * (1 - NU ** 2) / (4 * E)
-    a = (a_inf3 * -np.expm1(-t / tau)) ** (1 / 3)
-    h = np.sqrt(np.clip(a ** 2 - np.asarray(r) ** 2, 0.0, None))
-    rate = np.divide(a_inf3 * np.exp(-t / tau) / (3 * tau * a), h, out=np.zeros_like(h),
-                     where=h > 0)
-    return 2 * E / (np.pi * R * (1 - NU ** 2)) * (h + tau * rate)
-
-
 def lee_radok_p(law, r, t):
-    if law == "kelvin_voigt":
-        return kelvin_voigt_pressure(r, t)
-    return an.lee_radok_pressure(r, t, W, R, E, NU, LAWS[law][1], n_steps=1000)
+    """Lee-Radok p(r, t) [Pa] (analytic.lee_radok_pressure; for Kelvin-Voigt its branch for
+    phi(0) = 0: p = 2E/(pi R (1 - nu^2)) (h + tau dh/dt), E the long-term modulus)."""
+    return an.lee_radok_pressure(np.asarray(r, float), t, W, R, E, NU, LAWS[law][1],
+                                 n_steps=1000)
 
 
 def zigzag(pc):
@@ -416,8 +406,8 @@ def plot(rows, keep, out):
                 ax.plot(t[1:], keep[name][1]["pc"][1:] / 1e9, "o-", ms=3, color=color,
                         label=name)
         tt = np.linspace(t[1], t[-1], 200)
-        ax.plot(tt, [kelvin_voigt_pressure(0.0, x) / 1e9 for x in tt], "k--", lw=1,
-                label="Lee–Radok")
+        p_lr = [float(lee_radok_p("kelvin_voigt", [0.0], x)[0]) for x in tt]
+        ax.plot(tt, np.array(p_lr) / 1e9, "k--", lw=1, label="Lee–Radok")
         ax.set_ylim(0, 6)
         ax.set_xlabel("t / τ")
         ax.set_ylabel("centre pressure [GPa]")
@@ -432,7 +422,7 @@ def plot(rows, keep, out):
                 ax.plot(x * 1e3, c.centre_profile(ds.p.values[k]) / 1e9, "o-", ms=2.5,
                         color=color, label=f"{name}, t = {ds.time.values[k]:.2f} τ")
         xs = np.linspace(-0.8e-3, 0.8e-3, 400)
-        ax.plot(xs * 1e3, kelvin_voigt_pressure(np.abs(xs), 0.5) / 1e9, "k--", lw=1,
+        ax.plot(xs * 1e3, lee_radok_p("kelvin_voigt", np.abs(xs), 0.5) / 1e9, "k--", lw=1,
                 label="Lee–Radok")
         ax.set_ylim(0, 5)
         ax.set_xlabel("x1 [mm]")
