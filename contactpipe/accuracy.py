@@ -20,7 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .exceptions import SceneError
+from .materials import ExponentialCreep
 from .scene_parts import MAX_POINTS, MAX_STEPS, MIN_POINTS, knot_steps
+from .solver.memory import resolve_body_rule
 
 __all__ = ["PRESETS", "Preset", "resolve_accuracy", "knot_multiple", "preload_fractions",
            "preload_error", "choose_preload", "PRELOAD_TARGET", "PRELOAD_AUTO_MAX"]
@@ -37,20 +39,34 @@ class Preset:
     steps_per_cycle: int          # steps per full cycle of the tangential program
     steps_per_relaxation: int     # steps per relaxation/retardation time of the bodies
     target: float                 # relative error reached (stick radius, traction, a³)
+    #: steps per relaxation/retardation time and per cycle when a body's memory takes the
+    #: rule "bdf2" (creep laws with little instantaneous elasticity under "auto")
+    steps_per_relaxation_bdf2: int = 0
+    steps_per_cycle_bdf2: int = 0
 
 
 # measured by studies/speed_accuracy.py (second-order time rule): the cheapest runs whose
 # stick-radius, traction, loop, energy and Lee-Radok a³ errors all stay within the target
 # on every finer grid and mesh measured (studies/README.md); steps are then raised so that
 # every knot of the load program lies on the time mesh (see resolve_accuracy)
+# A body whose memory takes "bdf2" (Kelvin-Voigt, Zener E0/Einf = 100 under "auto"; any law
+# with an explicit "bdf2") needs more steps: Lee-Radok a^3 of a ramp 0 -> W over tau held
+# to 2 tau, 192^2 auto: 1.2 / 0.39 / 0.12 / 0.036 % at 5 / 10 / 20 / 40 steps per tau for
+# both (Maxwell and Zener E0/Einf = 3 with "bdf2": 0.48 and 0.29 % at 5, 64^2), where
+# "linear" gives 0.02-0.09 %; the Maxwell fretting loop (tau = t', 48^2) with "bdf2"
+# reaches 5 / 1 / 0.2 % with 16 / 32 / 64 steps per cycle (studies/README.md).
 PRESETS = {
     "fast": Preset(cells_across_contact=16, steps_per_cycle=4, steps_per_relaxation=5,
-                   target=0.05),
+                   target=0.05, steps_per_relaxation_bdf2=5, steps_per_cycle_bdf2=16),
     "balanced": Preset(cells_across_contact=64, steps_per_cycle=4, steps_per_relaxation=5,
-                       target=0.01),
+                       target=0.01, steps_per_relaxation_bdf2=10, steps_per_cycle_bdf2=32),
     "accurate": Preset(cells_across_contact=171, steps_per_cycle=32, steps_per_relaxation=40,
-                       target=0.002),
+                       target=0.002, steps_per_relaxation_bdf2=40, steps_per_cycle_bdf2=64),
 }
+#: A term of a creep function counts for the steps per time constant when its amplitude
+#: is at least this fraction of phi's largest value over the window [1] (a fitted series
+#: carries negligible terms at every fixed time).
+TERM_FRACTION = 0.01
 
 
 def _tangential_cycles(scene) -> float:
@@ -64,15 +80,46 @@ def _tangential_cycles(scene) -> float:
 
 
 def _characteristic_times(scene):
+    """The time constants of the bodies' creep functions [s] (of their normal compliance
+    too when the Poisson ratio varies), each with the body: 1/b of a dashpot and the tau_i
+    of terms of at least :data:`TERM_FRACTION` of phi's largest value over the window.
+    A tabulated phi has none."""
     out = []
+    window = scene.load.window
     for spec in (scene.indenter, scene.halfspace):
-        for key in ("relaxation_time", "retardation_time"):
-            v = getattr(spec, key, None)
-            if v:
-                out.append(float(v))
-        if getattr(spec, "terms", None):
-            out.extend(float(tau) for _, tau in spec.terms)
+        body = spec.body()
+        if not body.has_memory or not isinstance(body.creep, ExponentialCreep):
+            continue
+        for creep in body.rule_creeps:
+            scale = creep.max_over(window) if window > 0 else abs(creep.phi0)
+            if creep.b > 0:
+                out.append((1.0 / creep.b, body))
+            out.extend((float(tau), body) for d, tau in zip(creep.d, creep.tau)
+                       if abs(d) >= TERM_FRACTION * scale)
     return out
+
+
+def _wanted_steps(pre, scene, knots, cycles, times) -> float:
+    """The steps the tangential cycles and the bodies' time constants ask for: per cycle
+    and per the shortest time constant, with the "bdf2" columns when a body's memory takes
+    "bdf2" at the step this gives."""
+    window = scene.load.window
+
+    def want(per_cycle, per_time):
+        w = float(knots)
+        if cycles > 0:
+            w = max(w, per_cycle * cycles)
+        if times and knots > 0:
+            w = max(w, per_time * window / min(t for t, _ in times))
+        return w
+
+    plain = want(pre.steps_per_cycle, pre.steps_per_relaxation)
+    if knots > 0 and times:
+        dt = window / max(plain, 1.0)
+        rule = scene.solver.time_rule
+        if any(resolve_body_rule(b.rule_creeps, dt, rule) == "bdf2" for _, b in times):
+            return max(plain, want(pre.steps_per_cycle_bdf2, pre.steps_per_relaxation_bdf2))
+    return plain
 
 
 def knot_multiple(scene) -> int:
@@ -115,13 +162,8 @@ def resolve_accuracy(scene):
         n += n % 2
         points.append(min(max(n, MIN_POINTS), MAX_POINTS))
     knots = len(scene.load.knots()[0]) - 1
-    want = float(knots)
-    cycles = _tangential_cycles(scene)
-    if cycles > 0:
-        want = max(want, pre.steps_per_cycle * cycles)
-    times = _characteristic_times(scene)
-    if times and knots > 0:
-        want = max(want, pre.steps_per_relaxation * scene.load.window / min(times))
+    want = _wanted_steps(pre, scene, knots, _tangential_cycles(scene),
+                         _characteristic_times(scene))
     if want > MAX_STEPS:
         raise SceneError(f"solver.accuracy = {name!r} asks for {want:.3g} time steps "
                          f"({pre.steps_per_cycle} per load cycle, "

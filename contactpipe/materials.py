@@ -820,17 +820,17 @@ def _parse_table(text, path, kind) -> np.ndarray:
     what, ncol = TABLE_KINDS[kind]
     rows, header_ok = [], True
     for number, line in enumerate(text.splitlines(), start=1):
-        text = line.strip()
-        if not text or text.startswith("#"):
+        row = line.strip()
+        if not row or row.startswith("#"):
             continue
-        items = text.replace(",", " ").replace(";", " ").split()
+        items = row.replace(",", " ").replace(";", " ").split()
         try:
             values = [float(x) for x in items]
         except ValueError:
             if header_ok and not rows:
                 header_ok = False                  # one header line of column names
                 continue
-            raise ValueError(f"{path}, line {number}: {text[:60]!r} is not {ncol} numbers "
+            raise ValueError(f"{path}, line {number}: {row[:60]!r} is not {ncol} numbers "
                              f"({what})") from None
         if len(values) != ncol:
             raise ValueError(f"{path}, line {number}: {len(values)} columns, expected "
