@@ -92,10 +92,12 @@ def _characteristic_times(scene):
             continue
         for creep in body.rule_creeps:
             scale = creep.max_over(window) if window > 0 else abs(creep.phi0)
-            if creep.b > 0:
-                out.append((1.0 / creep.b, body))
-            out.extend((float(tau), body) for d, tau in zip(creep.d, creep.tau)
-                       if abs(d) >= TERM_FRACTION * scale)
+            if not np.isfinite(scale):      # extreme constants: keep every term
+                scale = 0.0
+            found = ([1.0 / creep.b] if creep.b > 0 else []) + [
+                float(tau) for d, tau in zip(creep.d, creep.tau)
+                if abs(d) >= TERM_FRACTION * scale]
+            out.extend((t, body) for t in found if 0.0 < t < np.inf)
     return out
 
 
@@ -162,8 +164,9 @@ def resolve_accuracy(scene):
         n += n % 2
         points.append(min(max(n, MIN_POINTS), MAX_POINTS))
     knots = len(scene.load.knots()[0]) - 1
-    want = _wanted_steps(pre, scene, knots, _tangential_cycles(scene),
-                         _characteristic_times(scene))
+    with np.errstate(all="ignore"):       # extreme but valid constants must not warn
+        want = _wanted_steps(pre, scene, knots, _tangential_cycles(scene),
+                             _characteristic_times(scene))
     if want > MAX_STEPS:
         raise SceneError(f"solver.accuracy = {name!r} asks for {want:.3g} time steps "
                          f"({pre.steps_per_cycle} per load cycle, "

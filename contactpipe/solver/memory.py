@@ -86,8 +86,12 @@ START_KINDS = ("exponential_euler", "linear", "bdf1")
 def is_monotone(creep: ExponentialCreep, dt: float, rule: str) -> bool:
     """True when no amplification factor of the rule's traction error is negative (or
     complex with a negative real part): the error then never changes sign from one step
-    to the next (:func:`error_amplification`)."""
-    g = error_amplification(creep, dt, rule)
+    to the next (:func:`error_amplification`). False when the rule cannot solve for the
+    current traction, or the constants are beyond float64."""
+    try:
+        g = error_amplification(creep, dt, rule)
+    except (ValueError, np.linalg.LinAlgError):
+        return False      # no weight for the current traction, or constants beyond float64
     # |g| < 1e-6: a zero factor of a Jordan block, split by round-off into ±1e-8
     return bool(np.all((g.real >= -1e-12) | (np.abs(g) < 1e-6)))
 
