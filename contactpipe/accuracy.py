@@ -196,8 +196,8 @@ def preload_fractions(n: int) -> np.ndarray:
     Under a growing load the contact radius grows like W^(1/3): uniform fractions give the
     first sub-step half the final radius and converge slowly; squared fractions spread
     the growth of the radius (measured at 32^2 and 64^2, rigid sphere on Maxwell,
-    nu = 0.3: the q field 2-4 times closer to a 1024-sub-step path than uniform fractions
-    at 8-128 sub-steps, about first order; docs/time-integration.md)."""
+    nu = 0.3: the q field 1.5-5 times closer to a 256-sub-step path than uniform fractions
+    at 8-64 sub-steps, about first order; docs/time-integration.md section 7)."""
     k = np.arange(1, int(n) + 1, dtype=float)
     return (k / float(n)) ** 2
 
@@ -208,7 +208,7 @@ def preload_error(coarse, fine, m_coarse, m_fine, n, mu):
     C = |q_fine - q_coarse| / (1/m_coarse - 1/m_fine), error C/n. The norm is the rms over
     the cells in contact in either path of |q| (both components), over mu p_max [1];
     None without both paths or without contact. Measured to over-estimate the error
-    against a 1024-sub-step path by 1.1-3 times (docs/time-integration.md)."""
+    against a 256-sub-step path by 1.1-3 times (docs/time-integration.md section 7)."""
     if coarse is None or fine is None:
         return None
     (q0, p0), (q1, p1) = coarse, fine
