@@ -18,9 +18,10 @@ and what is allowed::
 
 Each table is read by the table-driven reader of :mod:`contactpipe.tables`; this module
 adds the rules across parts: two rigid bodies, the step-start rule without instantaneous
-elasticity, gross sliding, the default time mesh (the least uniform mesh that holds
-every load knot), a creep table that must reach the end of the load window, and the
-automatic grid (:func:`hertz_semi_axes`).
+elasticity or at or above its stability bound, gross sliding, the default time mesh (the
+least uniform mesh that holds every load knot), a creep table (or the data of a fitted one)
+that must reach the end of the load window, and the automatic grid
+(:func:`hertz_semi_axes`).
 
 TOML has no null: keys whose value is ``None`` (e.g. ``solver.accuracy``) are left out of
 :meth:`Scene.to_dict`, and ``None`` given for a key means "absent".
@@ -328,9 +329,9 @@ class Scene:
     the part objects themselves), validates everything and raises one
     :class:`~contactpipe.SceneError` listing every problem. The stored scene is
     normalised: numbers are floats (ints accepted), lists are tuples, defaults are
-    resolved (``time.steps``, ``geometry.height``) and ``geometry.file`` is absolute (a
-    relative one is taken relative to the current directory here, to the scene file's
-    folder in :meth:`from_toml`).
+    resolved (``time.steps``, ``geometry.height``, a fitted body's ``young``) and
+    ``geometry.file`` and a body's ``file`` are absolute (a relative one is taken relative
+    to the current directory here, to the scene file's folder in :meth:`from_toml`).
 
     Parameters
     ----------
