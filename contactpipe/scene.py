@@ -18,9 +18,10 @@ and what is allowed::
 
 Each table is read by the table-driven reader of :mod:`contactpipe.tables`; this module
 adds the rules across parts: two rigid bodies, the step-start rule without instantaneous
-elasticity, gross sliding, the default time mesh (the least uniform mesh that holds
-every load knot), a creep table that must reach the end of the load window, and the
-automatic grid (:func:`hertz_semi_axes`).
+elasticity or at or above its stability bound, gross sliding, the default time mesh (the
+least uniform mesh that holds every load knot), a creep table (or the data of a fitted one)
+that must reach the end of the load window, and the automatic grid
+(:func:`hertz_semi_axes`).
 
 TOML has no null: keys whose value is ``None`` (e.g. ``solver.accuracy``) are left out of
 :meth:`Scene.to_dict`, and ``None`` given for a key means "absent".
@@ -212,7 +213,8 @@ def _check_step_start_stability(p, time, problems):
         creep = spec.creep_function()
         if creep.phi0 == 0:
             continue                      # refused above with its own message
-        bound = materials.step_start_stable_step(creep)
+        # with a varying Poisson ratio the normal compliance has its own bound too
+        bound = min(materials.step_start_stable_step(c) for c in spec.body().rule_creeps)
         if dt >= bound:
             steps = math.floor(window / bound) + 1
             problems.append(
@@ -245,13 +247,24 @@ def _check_sliding(p, problems):
 
 
 def _check_tables(p, problems):
-    """A creep table must reach the end of the load window: phi is unknown past it."""
+    """A creep table, or the data of a fitted one, must reach the end of the load window:
+    phi is unknown (a fit unfounded) past it."""
     load = p["load"]
     if load is None:
         return
     window = load.window
     for side in ("indenter", "halfspace"):
         spec = p[side]
+        if spec is not None and spec.creep == "fit":
+            span = materials.table_time_span(spec.file, spec.table_kind)
+            if span < window:
+                reach = ("1/(2 pi f_min)" if spec.table_kind == "dynamic"
+                         else "its last time")
+                problems.append(
+                    f"{side}.file = {show(spec.file)}: the {spec.table_kind} data reach "
+                    f"t = {span:g} s ({reach}), before the end of the load window "
+                    f"(load.time spans {window:g} s): the fitted creep function is not "
+                    f"founded on data there; give data up to t >= {window:g} s")
         if spec is None or spec.creep != "tabulated":
             continue
         last = spec.creep_function().last_time
@@ -316,9 +329,9 @@ class Scene:
     the part objects themselves), validates everything and raises one
     :class:`~contactpipe.SceneError` listing every problem. The stored scene is
     normalised: numbers are floats (ints accepted), lists are tuples, defaults are
-    resolved (``time.steps``, ``geometry.height``) and ``geometry.file`` is absolute (a
-    relative one is taken relative to the current directory here, to the scene file's
-    folder in :meth:`from_toml`).
+    resolved (``time.steps``, ``geometry.height``, a fitted body's ``young``) and
+    ``geometry.file`` and a body's ``file`` are absolute (a relative one is taken relative
+    to the current directory here, to the scene file's folder in :meth:`from_toml`).
 
     Parameters
     ----------
@@ -372,13 +385,14 @@ class Scene:
             raise SceneError(f"scene keys must be strings, got {show(bad)}; allowed keys: "
                              f"{', '.join(TOP_KEYS)}")
         d = dict(d)
-        geo = d.get("geometry")
-        if base_dir is not None and isinstance(geo, Mapping) and isinstance(geo.get("file"),
-                                                                            str):
-            file = os.path.expanduser(geo["file"])
-            if not os.path.isabs(file):
-                d["geometry"] = {**geo, "file": os.path.join(
-                    os.path.abspath(os.fspath(base_dir)), file)}
+        for part in ("geometry", "indenter", "halfspace"):   # files of the scene's tables
+            table = d.get(part)
+            if base_dir is not None and isinstance(table, Mapping) and \
+                    isinstance(table.get("file"), str):
+                file = os.path.expanduser(table["file"])
+                if not os.path.isabs(file):
+                    d[part] = {**table, "file": os.path.join(
+                        os.path.abspath(os.fspath(base_dir)), file)}
         return cls(**d)
 
     @classmethod
@@ -430,12 +444,13 @@ class Scene:
         """
         d = self.to_dict()
         del d["output"]
-        if self.geometry.shape == "surface":
-            h = hashlib.sha256()
-            with open(self.geometry.file, "rb") as f:
-                for chunk in iter(lambda: f.read(1 << 20), b""):
-                    h.update(chunk)
-            d["geometry"]["file"] = "sha256:" + h.hexdigest()
+        for part in ("geometry", "indenter", "halfspace"):  # a file counts by its content
+            if d[part].get("file") is not None:
+                h = hashlib.sha256()
+                with open(d[part]["file"], "rb") as f:
+                    for chunk in iter(lambda: f.read(1 << 20), b""):
+                        h.update(chunk)
+                d[part]["file"] = "sha256:" + h.hexdigest()
         text = json.dumps(d, sort_keys=True, separators=(",", ":"), allow_nan=False)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
@@ -464,6 +479,9 @@ class Scene:
             del d["time"]["steps"]
         if self.geometry.shape == "flat_punch" and self.geometry.height == self.geometry.radius:
             del d["geometry"]["height"]
+        for side in ("indenter", "halfspace"):        # a fitted modulus is derived again
+            if getattr(self, side).creep == "fit":
+                del d[side]["young"]
         problems = []
         for path, value in changes.items():
             if not isinstance(path, str) or not path or "" in path.split("."):

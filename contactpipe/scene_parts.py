@@ -33,7 +33,7 @@ __all__ = ["Part", "Geometry", "BodySpec", "Friction", "Fretting", "Load", "Grid
 
 SHAPES = ("sphere", "ellipsoid", "flat_punch", "surface")
 MATERIALS = ("rigid", "elastic", "viscoelastic")
-CREEP_MODELS = ("maxwell", "kelvin_voigt", "zener", "prony", "tabulated")
+CREEP_MODELS = ("maxwell", "kelvin_voigt", "zener", "prony", "tabulated", "fit")
 PRELOADS = ("frictional", "frictionless")
 TIME_RULES = ("auto", "bdf2", "linear", "step_start")
 TANGENTIAL_MODELS = ("auto", "scalar", "vector")
@@ -55,15 +55,17 @@ SHAPE_KEYS = {
     "flat_punch": (("radius",), ("height",)),
     "surface": (("file",), ()),
 }
-#: Keys each creep model requires and allows (the ``tabulated`` model is an extension).
+#: Keys each creep model requires and allows (``tabulated`` and ``fit`` are extensions).
 CREEP_KEYS = {
     "maxwell": (("relaxation_time",), ()),
     "kelvin_voigt": (("retardation_time",), ()),
     "zener": (("relaxed_young", "retardation_time"), ()),
     "prony": (("terms",), ("relaxation_time",)),
     "tabulated": (("table",), ()),
+    "fit": (("file", "table_kind"), ()),
 }
-MODEL_KEYS = ("relaxation_time", "retardation_time", "relaxed_young", "terms", "table")
+MODEL_KEYS = ("relaxation_time", "retardation_time", "relaxed_young", "terms", "table",
+              "file", "table_kind")
 
 
 def _positive(x) -> bool:
@@ -244,10 +246,12 @@ class BodySpec(Part):
         A rigid body takes no constants.
     young : float
         Young modulus [Pa]: the instantaneous (glassy) one for a viscoelastic body, the
-        long-term one for Kelvin-Voigt, the one phi is normalised by for a table.
+        long-term one for Kelvin-Voigt, the one phi is normalised by for a table; for
+        ``creep = "fit"`` the fitted one (derived from the table when absent).
     poisson : float
-        Poisson ratio [1], in [0, 0.5]; constant in time.
-    creep : {"maxwell", "kelvin_voigt", "zener", "prony", "tabulated"}
+        Poisson ratio [1], in [0, 0.5]: constant in time, or with ``bulk = "elastic"``
+        its value where phi = 1.
+    creep : {"maxwell", "kelvin_voigt", "zener", "prony", "tabulated", "fit"}
         Viscoelastic only; each model takes exactly its keys (:data:`CREEP_KEYS`).
     relaxation_time : float
         t' [s] (maxwell; optional dashpot of prony).
@@ -260,6 +264,16 @@ class BodySpec(Part):
     table : tuple of (t, phi)
         Tabulated phi(t): t [s] ascending from 0, phi non-decreasing, > 0 after t = 0;
         it must reach the end of the load window (checked by the scene).
+    bulk : {"creep", "elastic"}, optional
+        Viscoelastic only. Absent (or "creep"): every compliance creeps with phi, the
+        Poisson ratio is constant (paper eq. 9). "elastic": phi is the *shear* creep
+        function, the bulk modulus young / (3 (1 - 2 poisson)) does not creep, and the
+        Poisson ratio grows in time (:func:`contactpipe.materials.elastic_bulk_parts`).
+    file : str
+        ``creep = "fit"``: the material table (text or CSV), stored as an absolute path.
+    table_kind : {"creep", "relaxation", "dynamic"}
+        ``creep = "fit"``: what the file holds (:data:`contactpipe.materials.TABLE_KINDS`);
+        tensile data, or shear data with ``bulk = "elastic"``.
     """
 
     material: str
@@ -271,6 +285,9 @@ class BodySpec(Part):
     relaxed_young: float | None = None
     terms: tuple | None = None
     table: tuple | None = None
+    bulk: str | None = None
+    file: str | None = None
+    table_kind: str | None = None
 
     PATH = "body"
     FIELDS = (
@@ -288,6 +305,10 @@ class BodySpec(Part):
         Field("terms", "pairs", "a non-empty list of [c, tau] pairs with c > 0 and tau > 0 "
                                 "[s]", ok=lambda p: p[0] > 0 and p[1] > 0, unit="1, s"),
         Field("table", "pairs", _TABLE_WHAT, check=_check_table, unit="s, 1"),
+        Field("bulk", "choice", options=materials.BULK),
+        Field("file", "path", "the path of a text or CSV table (relative to the scene "
+                              "file)"),
+        Field("table_kind", "choice", options=tuple(materials.TABLE_KINDS)),
     )
 
     @classmethod
@@ -302,11 +323,14 @@ class BodySpec(Part):
                 r.forbid(f.name, "by a rigid body (material = 'rigid' takes no constants)")
             return cls.make(material="rigid") if r.ok else None
         ctx = f" for material = {material!r}"
-        v = r.read(cls.FIELDS[1:3], need=ctx, require=("young", "poisson"))
         if material == "elastic":
-            for k in ("creep",) + MODEL_KEYS:
+            v = r.read(cls.FIELDS[1:3], need=ctx, require=("young", "poisson"))
+            for k in ("creep", "bulk") + MODEL_KEYS:
                 r.forbid(k, "by an elastic body (creep keys need material = 'viscoelastic')")
             return cls.make(material="elastic", **v) if r.ok else None
+        fit = r.raw.get("creep") == "fit"          # young then comes from the table
+        v = r.read(cls.FIELDS[1:3], need=ctx,
+                   require=("poisson",) if fit else ("young", "poisson"))
         creep = r.value(cls.field("creep"), need=ctx, required=True)
         if creep is None:
             return None
@@ -316,11 +340,26 @@ class BodySpec(Part):
                 r.forbid(k, f"by creep = {creep!r} (it takes: {', '.join(req + opt)})")
         v.update(r.read([cls.field(k) for k in MODEL_KEYS if k in req + opt],
                         need=f" for creep = {creep!r}", require=req))
+        bulk = r.value(cls.field("bulk"))
+        v["bulk"] = None if bulk == "creep" else bulk
+        if v["bulk"] == "elastic" and creep == "tabulated":
+            r.add(f"{r.key('bulk')} = 'elastic' needs a creep law of exponentials "
+                  f"(maxwell, kelvin_voigt, zener, prony, fit), not creep = 'tabulated'")
         young, relaxed = v["young"], v.get("relaxed_young")
         if creep == "zener" and young is not None and relaxed is not None and relaxed >= young:
             r.add(f"{r.key('relaxed_young')} must be below {r.key('young')} = {young:g} Pa "
                   f"(the relaxed modulus E_inf < the instantaneous E0), got {relaxed:g}")
+        if creep == "fit" and r.ok:
+            v["file"] = os.path.abspath(os.path.expanduser(v["file"]))
+            v["young"] = _fitted_young(r, v)
         return cls.make(material="viscoelastic", creep=creep, **v) if r.ok else None
+
+    def fit(self):
+        """The :class:`~contactpipe.materials.PronyFit` of ``creep = "fit"`` (None for the
+        other models); cached while the file is unchanged."""
+        if self.creep != "fit":
+            return None
+        return materials.fit_table_file(self.file, self.table_kind)
 
     def creep_function(self):
         """The normalised creep function phi(t) (:data:`materials.ELASTIC` if none)."""
@@ -334,6 +373,8 @@ class BodySpec(Part):
             return materials.zener(self.young, self.relaxed_young, self.retardation_time)
         if self.creep == "prony":
             return materials.prony(self.terms, self.relaxation_time)
+        if self.creep == "fit":
+            return self.fit().creep
         t, phi = zip(*self.table)
         return materials.TabulatedCreep(t=tuple(t), phi=tuple(phi))
 
@@ -342,7 +383,29 @@ class BodySpec(Part):
         if self.material == "rigid":
             return materials.Body(kind="rigid")
         return materials.Body(kind=self.material, young=self.young, poisson=self.poisson,
-                              creep=self.creep_function())
+                              creep=self.creep_function(), bulk=self.bulk or "creep")
+
+
+#: Relative difference of ``young`` from a fit's modulus that is refused (a stored scene
+#: writes the fitted value back exactly; anything else is a contradiction).
+FIT_YOUNG_RTOL = 1e-9
+
+
+def _fitted_young(r: Reader, v: dict):
+    """The Young modulus of ``creep = "fit"`` [Pa]: from the fit (shear data with
+    ``bulk = "elastic"``: 2 (1 + nu) G); a given ``young`` must agree. None (with the
+    problem recorded, naming the file key) when the table is refused."""
+    try:
+        fit = materials.fit_table_file(v["file"], v["table_kind"])
+    except ValueError as e:
+        r.add(f"{r.key('file')} = {show(v['file'])} ({v['table_kind']} table): {e}")
+        return None
+    young = fit.young * (2.0 * (1.0 + v["poisson"]) if v.get("bulk") == "elastic" else 1.0)
+    given = v.get("young")
+    if given is not None and not math.isclose(given, young, rel_tol=FIT_YOUNG_RTOL):
+        r.add(f"{r.key('young')} = {given:g} Pa contradicts the modulus of the fitted "
+              f"table {young:.10g} Pa; leave young out (it is taken from the table)")
+    return young
 
 
 # ----------------------------------------------------------------------------- friction
@@ -735,8 +798,10 @@ class Solver(Part):
         Tangential model: chosen from the scene, q2 = 0 (Cattaneo-Mindlin), or both.
     max_coupling_passes : int
         Cap on the normal <-> tangential passes of the middle loop, >= 1.
-    preload_substeps : int
-        Substeps of the normal preload, from 1 to 10 000.
+    preload_substeps : int or "auto"
+        Sub-steps of a frictional preload (graded, finer where the contact grows fastest),
+        from 1 to 10 000, or "auto": as many as the accuracy target asks for
+        (``accuracy``'s, else 1 %; docs/time-integration.md).
     fft : {"auto", "pyfftw", "scipy"}
     threads : int
         FFT threads, from 1 to 1024.
@@ -751,7 +816,7 @@ class Solver(Part):
     time_rule: str = "auto"
     tangential: str = "auto"
     max_coupling_passes: int = 100
-    preload_substeps: int = 8
+    preload_substeps: int | str = 8
     fft: str = "auto"
     threads: int = 1
     accuracy: str | None = None
@@ -764,8 +829,8 @@ class Solver(Part):
         Field("time_rule", "choice", options=TIME_RULES, default="auto"),
         Field("tangential", "choice", options=TANGENTIAL_MODELS, default="auto"),
         Field("max_coupling_passes", "integer", _AT_LEAST_1, ok=_at_least_1, default=100),
-        Field("preload_substeps", "integer", _AT_LEAST_1, ok=_at_least_1, default=8,
-              cap=MAX_PRELOAD_SUBSTEPS,
+        Field("preload_substeps", "integer", "an integer >= 1, or 'auto'", ok=_at_least_1,
+              default=8, options=("auto",), cap=MAX_PRELOAD_SUBSTEPS,
               cap_why="the preload needs a few substeps; the default is 8"),
         Field("fft", "choice", options=FFT_BACKENDS, default="auto"),
         Field("threads", "integer", _AT_LEAST_1, ok=_at_least_1, default=1,

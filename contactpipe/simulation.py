@@ -34,7 +34,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .accuracy import knot_multiple, resolve_accuracy
+from .accuracy import (PRELOAD_TARGET, PRESETS, choose_preload, knot_multiple,
+                       preload_fractions, resolve_accuracy)
 from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
 from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
                          OutputPathError, SceneError, one_line)
@@ -43,10 +44,10 @@ from .materials import dundurs_beta
 from .nomenclature import variables_for
 from .planning import check_resources, estimate_resources, plan as make_plan
 from .solver.coupling import Previous, Tolerances, solve_instant
-from .solver.memory import make_memory
+from .solver.memory import BodyMemory, make_memory, resolve_body_rule
 from .solver.normal import NormalResult
-from .solver.operator import (ContactOperator, body_spectra, convolver, history_displacement,
-                              history_kernels)
+from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
+                              history_displacement, history_kernels)
 
 __all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
            "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
@@ -248,7 +249,8 @@ class _Problem:
         n1, n2 = self.shape
         # extreme constants may overflow the kernels: harmless here, refused just below
         with np.errstate(over="ignore", invalid="ignore"):
-            spectra = [body_spectra(b, n1, n2, d1, d2, backend, nthreads) for b in self.bodies]
+            spectra = [body_spectra_parts(b, n1, n2, d1, d2, backend, nthreads)
+                       for b in self.bodies]
             self.conv = convolver(n1, n2, backend, int(nthreads))
             fresh = self.new_memories()
             self.spectra = spectra
@@ -258,50 +260,69 @@ class _Problem:
                                                   for s, m in zip(spectra, fresh)))
             self.op_next = self.operator(self._weights(fresh, False)) \
                 if self.t.size > 1 else self.op_first
+            #: the time rule each body's memory applies ("auto" resolved), None without one
+            self.rules = [None if m is None else m.rule for m in fresh]
         self._check_finite(d1, d2)
+        self._preload, self._trial = None, None       # see preload()
 
     def operator(self, weights) -> ContactOperator:
         """The operator of an instant whose traction has the creep weights ``weights``
-        (one per body), made once per distinct tuple: a time rule may weight t0, its start
-        steps and the later steps apart."""
-        key = tuple(float(w) for w in weights)
+        (one per body: a float, or a tuple with one per kernel part of a body whose
+        Poisson ratio varies), made once per distinct tuple: a time rule may weight t0,
+        its start steps and the later steps apart."""
+        key = tuple(float(w) if np.ndim(w) == 0 else tuple(float(x) for x in w)
+                    for w in weights)
         if key not in self._operators:
             self._operators[key] = ContactOperator(*self.spectra, *key, self.conv)
         return self._operators[key]
 
     def instant_weights(self, mems) -> list:
         """The creep weights of the next instant's traction, one per body [1]."""
-        return [0.0 if b.rigid else float(m.instant_weight) if m is not None
-                else (float(b.creep.phi0) if b.has_memory else 1.0)
+        return [self._body_weight(b, m, None if m is None else m.instant_weight)
                 for b, m in zip(self.bodies, mems)]
 
     def new_memories(self) -> list:
-        """A fresh memory per viscoelastic body (None for the others)."""
+        """A fresh memory per viscoelastic body (None for the others): one recursion per
+        kernel part, all with the rule the body's compliances call for."""
         if self.plan.memory == "none":
             return [None, None]
-        return [make_memory(b.creep, self.dt, self.plan.time_rule, (3,) + self.shape)
-                if b.has_memory else None for b in self.bodies]
+        out = []
+        for b in self.bodies:
+            if not b.has_memory:
+                out.append(None)
+                continue
+            rule = resolve_body_rule(b.rule_creeps, self.dt, self.plan.time_rule)
+            parts = [make_memory(c, self.dt, rule, (3,) + self.shape) for c in b.part_creeps]
+            out.append(parts[0] if len(parts) == 1 else BodyMemory(parts))
+        return out
+
+    @staticmethod
+    def _body_weight(b, m, weight):
+        """A body's creep weight(s): 0 when rigid, the memory's, or phi(0) of each part
+        without a memory (1 for an elastic body)."""
+        if b.rigid:
+            return 0.0
+        if m is not None:
+            return weight
+        w = tuple(float(c.phi0) for c in b.part_creeps) if b.has_memory else (1.0,)
+        return w[0] if len(w) == 1 else w
 
     def _weights(self, mems, first):
-        w = []
-        for b, m in zip(self.bodies, mems):
-            if b.rigid:
-                w.append(0.0)
-            elif m is None:
-                w.append(float(b.creep.phi0) if b.has_memory else 1.0)
-            else:
-                w.append(m.weight0 if first else m.weight)
-        return w
+        return [self._body_weight(b, m, None if m is None else
+                                  (m.weight0 if first else m.weight))
+                for b, m in zip(self.bodies, mems)]
 
     def _check_finite(self, d1, d2):
         """Refuse constants whose influence coefficients float64 cannot hold, or whose
         pressures and displacements it cannot square (the solvers' inner products)."""
         kernels = [op.k for op in (self.op_first, self.op_next) if not op.rigid]
-        kernels += [k for k in self.hist_kernels if k is not None]
+        kernels += [p for k in self.hist_kernels if k is not None
+                    for p in (k if isinstance(k, list) else [k])]
         sc = self.scene
         where = (f"indenter: {sc.indenter.material}{_young(sc.indenter)}, halfspace: "
                  f"{sc.halfspace.material}{_young(sc.halfspace)}, cells {d1:.3g} x {d2:.3g} m, "
-                 f"creep weights {self.op_next.w1:.3g}, {self.op_next.w2:.3g} with steps of "
+                 f"creep weights {_show_weight(self.op_next.w1)}, "
+                 f"{_show_weight(self.op_next.w2)} with steps of "
                  f"{self.dt:.3g} s")
         if not all(np.isfinite(v).all() for k in kernels for v in k.values()):
             raise SceneError(
@@ -324,12 +345,57 @@ class _Problem:
                     f"relaxation times, load.normal_force and the grid")
 
     def fractions(self, first, T):
-        """The sub-steps of an instant: those of a frictional preload at t0, else one."""
+        """The sub-steps of an instant: those of a frictional preload at t0
+        (:func:`preload_fractions`, their count from :meth:`preload`), else one."""
         pl = self.plan
         if first and self.tang and pl.preload == "frictional" and \
                 (pl.coupling != "none" or np.any(T)):
-            return np.linspace(0.0, 1.0, int(self.scene.solver.preload_substeps) + 1)[1:]
+            n = self._trial if self._trial is not None else self.preload()["substeps"]
+            return preload_fractions(n)
         return np.array([1.0])
+
+    def _preload_active(self) -> bool:
+        pl = self.plan
+        return bool(self.tang and pl.preload == "frictional" and self.t.size > 0 and
+                    (pl.coupling != "none" or self.T1[0] != 0 or self.T2[0] != 0))
+
+    def preload(self) -> dict:
+        """The frictional preload's sub-step count and its estimated error (cached;
+        :func:`contactpipe.accuracy.choose_preload`). The preload path at t0 starts from
+        the unloaded state without history, so it is known before the march: coarser
+        paths run on a scratch state (:meth:`_preload_path`).
+
+        Returns
+        -------
+        dict
+            ``substeps`` (0 without a frictional preload), ``error`` (estimated rms error
+            of the q field over the contact, over mu p_max [1], or None), ``pairs`` (the
+            FFT pairs the coarser paths cost).
+        """
+        if self._preload is None:
+            pairs0 = self.conv.pairs
+            n, est = 0, None
+            if self._preload_active():
+                acc = self.scene.solver.accuracy
+                target = PRESETS[acc].target if acc in PRESETS else PRELOAD_TARGET
+                n, est = choose_preload(self.scene.solver.preload_substeps,
+                                        self._preload_path, self.mu, target)
+            self._preload = {"substeps": n, "error": est,
+                             "pairs": int(self.conv.pairs - pairs0)}
+        return self._preload
+
+    def _preload_path(self, substeps):
+        """(q, p) after a frictional preload in ``substeps`` sub-steps on a scratch state,
+        or None when it does not converge."""
+        self._trial = int(substeps)
+        try:
+            st = State.initial(self.shape, self.new_memories())
+            _step(self, st, 0)
+            return st.q.copy(), st.p.copy()
+        except ConvergenceError:
+            return None
+        finally:
+            self._trial = None
 
     def sub_plan(self, first):
         """The paper's initial frictionless normal solve at t0, then shear from there."""
@@ -380,12 +446,42 @@ class _Problem:
         }
         if accuracy_note:
             out["accuracy"] = accuracy_note
+        out.update(self._material_attrs())
+        pre = self.preload()
+        if pre["substeps"]:
+            out["preload_substeps"] = pre["substeps"]
+            out["preload_estimate_fft_pairs"] = pre["pairs"]
+            if pre["error"] is not None:
+                out["preload_error_estimate"] = pre["error"]
+        return out
+
+    def _material_attrs(self) -> dict:
+        """What the bodies' memories used: the time rule each resolved to, the Poisson
+        model, and the fit of a creep function from a table."""
+        out = {}
+        sides = ("indenter", "halfspace")
+        used = [f"{side}: {rule}" for side, rule in zip(sides, self.rules) if rule]
+        if used:
+            out["time_rule_resolved"] = ", ".join(used)
+        for side, b in zip(sides, self.bodies):
+            if b.split:
+                out[f"{side}_poisson_model"] = ("elastic bulk: the Poisson ratio varies "
+                                                "from its value where phi = 1")
+            fit = getattr(self.scene, side).fit()
+            if fit is not None:
+                out[f"{side}_fit_rms_error"] = fit.rms_error
+                out[f"{side}_fit_max_error"] = fit.max_error
+                out[f"{side}_fit_terms"] = len(fit.creep.tau)
         return out
 
     def written(self, k) -> int:
         """Instants in the archive once instant ``k`` is done."""
         stride, last = int(self.scene.output.stride), self.t.size - 1
         return k // stride + 1 + (1 if k == last and k % stride else 0)
+
+
+def _show_weight(w) -> str:
+    return f"{w:.3g}" if np.ndim(w) == 0 else "(" + ", ".join(f"{x:.3g}" for x in w) + ")"
 
 
 def _young(part) -> str:
@@ -605,7 +701,8 @@ def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds,
 
 def _inputs(scene):
     """Files the scene reads, which its archive must not overwrite."""
-    return [getattr(scene.geometry, "file", None)]
+    return [getattr(part, "file", None) for part in (scene.geometry, scene.indenter,
+                                                     scene.halfspace)]
 
 
 def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None,

@@ -145,8 +145,8 @@ class Field:
     required : bool
         Absent is an error.
     options : tuple
-        A choice's options; for numbers, words also accepted in place of the list
-        (``"auto"``).
+        A choice's options; for numbers and integers, words also accepted in place of
+        the value (``"auto"``).
     length : int, optional
         Lists: the exact number of items.
     min_length : int
@@ -231,6 +231,8 @@ def _number(f, v):
 
 
 def _integer(f, v):
+    if isinstance(v, str) and v in f.options:    # a word accepted in place of the number
+        return v
     return int(v) if is_integer(v) and _ok(f, int(v)) else MISSING
 
 

@@ -29,6 +29,12 @@ Cases (each measured against its closed form):
     repeat the resolved rule's run), "bdf2" (second order, L-stable), "linear" (second
     order, A-stable) and "step_start" (the paper's rectangle rule).
 
+``lr_kv``, ``lr_zener100``
+    Creep laws with little instantaneous elasticity, under the ramp of ``lr_ramp``:
+    Kelvin-Voigt (tau = 1 s, E the long-term modulus) and Zener E0/Einf = 100 (tau = 1 s).
+    "auto" takes "bdf2" for them; they give the presets' "bdf2" column of steps per
+    retardation time (``lr_kv_a3``, ``lr_zener100_a3``).
+
 ``vf``
     Viscoelastic fretting, the paper's figure-3 case (rigid ball on Maxwell, tau = t'),
     on one grid (48^2 auto; 24^2 with --quick): there is no closed form, so the error is
@@ -40,7 +46,7 @@ Cases (each measured against its closed form):
     steps once the mesh hits the turning points).
 
 Grids 16^2 to 256^2 in steps of sqrt(2) in N (16, 24, 32, 48, 64, 96, 128, 192, 256; 384^2
-and 512^2 with --full), steps 5, 10, 40, 160 (and 640 with --full; multiples of 5 so that
+and 512^2 with --full), steps 5, 10, 20, 40, 160 (and 640 with --full; multiples of 5 so that
 the mesh hits the turning points of the fretting program); by default 192^2 and 256^2 run
 only up to 40 steps (md) and 10 steps (Lee-Radok) to keep the run to a few minutes.
 ``--grids``, ``--steps`` and ``--cases`` choose other sets.
@@ -79,28 +85,35 @@ import matplotlib.pyplot as plt
 from matplotlib.ticker import NullFormatter
 
 import contactpipe as cp
-from contactpipe.materials import maxwell as maxwell_creep, zener as zener_creep
+from contactpipe.materials import (kelvin_voigt as kelvin_voigt_creep, maxwell as maxwell_creep,
+                                   zener as zener_creep)
 from contactpipe.solver.memory import resolve_rule
 
 GRIDS = (16, 24, 32, 48, 64, 96, 128, 192, 256)
 GRIDS_FULL = GRIDS + (384, 512)
-STEPS, STEPS_FULL = (5, 10, 40, 160), (5, 10, 40, 160, 640)
+STEPS, STEPS_FULL = (5, 10, 20, 40, 160), (5, 10, 20, 40, 160, 640)
 #: "auto" first: its runs repeat those of the rule it resolves to (not run twice)
 RULES = ("auto", "bdf2", "linear", "step_start")
 #: the time rule the presets are measured with (the package's recommended rule)
 PRESET_RULE = "auto"
-CASES = ("hertz", "md", "lr_step", "lr_ramp", "lr_zener", "vf")
+CASES = ("hertz", "md", "lr_step", "lr_ramp", "lr_zener", "lr_kv", "lr_zener100", "vf")
 VF_GRID, VF_GRID_QUICK = 48, 24
 VF_REF_FACTOR = 4
 #: default: the largest grid only with few steps (the run stays within minutes)
 DEFAULT_LIMIT = {"md": {192: 40, 256: 40}, "lr_step": {192: 10, 256: 10},
-                 "lr_ramp": {192: 10, 256: 10}, "lr_zener": {192: 10, 256: 10}}
+                 "lr_ramp": {192: 10, 256: 10}, "lr_zener": {192: 10, 256: 10},
+                 "lr_kv": {192: 40, 256: 10}, "lr_zener100": {192: 40, 256: 10}}
 PRESETS = {"fast": 0.05, "balanced": 0.01, "accurate": 0.002}
 #: the measures each preset's target applies to
 PRESET_MEASURES = {"md": ("md_stick", "md_traction_mean", "md_energy"),
                    "vf": ("vf_loop", "vf_traction", "vf_pressure")}
 LR_WINDOW = 2.0
 ZENER = {"relaxed_young": c.E_GLASSY / 3, "retardation_time": 0.5}
+#: creep laws with little instantaneous elasticity (their own preset column), ramped
+STIFF_TAU = 1.0
+STIFF = {"lr_kv": {"creep": "kelvin_voigt", "retardation_time": STIFF_TAU},
+         "lr_zener100": {"creep": "zener", "relaxed_young": c.E_GLASSY / 100,
+                         "retardation_time": STIFF_TAU}}
 MEASURE_LABEL = {
     "hertz_p0": "Hertz: peak pressure p0",
     "hertz_a": "Hertz: contact radius (area)",
@@ -113,6 +126,8 @@ MEASURE_LABEL = {
     "lr_step_a3": "Lee–Radok, Maxwell step: a³",
     "lr_ramp_a3": "Lee–Radok, Maxwell ramp: a³",
     "lr_zener_a3": "Lee–Radok, Zener ramp: a³",
+    "lr_kv_a3": "Lee–Radok, Kelvin–Voigt ramp: a³",
+    "lr_zener100_a3": "Lee–Radok, Zener E0/E∞ = 100 ramp: a³",
     "vf_loop": "Maxwell fretting τ=t′: T–ω1 loop (vs ref.)",
     "vf_traction": "Maxwell fretting τ=t′: q RMS / μp_H (vs ref.)",
     "vf_pressure": "Maxwell fretting τ=t′: p RMS / p_H (vs ref.)",
@@ -132,7 +147,10 @@ def lr_scene(case, n, steps, rule):
         load = {"time": [0.0, LR_WINDOW], "normal_force": c.W}
     else:
         load = {"time": [0.0, 1.0, LR_WINDOW], "normal_force": [0.0, c.W, c.W]}
-    if case == "lr_zener":
+    if case in STIFF:
+        half = {"material": "viscoelastic", "young": c.E_GLASSY, "poisson": c.NU_STEEL,
+                **STIFF[case]}
+    elif case == "lr_zener":
         half = {"material": "viscoelastic", "young": c.E_GLASSY, "poisson": c.NU_STEEL,
                 "creep": "zener", **ZENER}
     else:
@@ -145,12 +163,18 @@ def lr_scene(case, n, steps, rule):
 
 
 def lr_creep(case):
+    if case == "lr_kv":
+        return kelvin_voigt_creep(STIFF_TAU)
+    if case == "lr_zener100":
+        return zener_creep(c.E_GLASSY, STIFF[case]["relaxed_young"], STIFF_TAU)
     if case == "lr_zener":
         return zener_creep(c.E_GLASSY, ZENER["relaxed_young"], ZENER["retardation_time"])
     return maxwell_creep(c.RELAXATION_TIME)
 
 
 def characteristic_time(case):
+    if case in STIFF:
+        return STIFF_TAU
     return ZENER["retardation_time"] if case == "lr_zener" else c.RELAXATION_TIME
 
 
@@ -225,7 +249,8 @@ def run_lr(case, n, steps, rule):
     a_max = float(c.an.lee_radok_radius(LR_WINDOW, lt, lw, c.R, young, c.NU_STEEL, creep))
     row = dict(case=case, grid=n, cells_across=2 * a_max / d, steps=steps,
                steps_per_unit=steps * characteristic_time(case) / LR_WINDOW,
-               unit="relaxation time" if case != "lr_zener" else "retardation time",
+               unit=("retardation time" if case == "lr_zener" or case in STIFF
+                     else "relaxation time"),
                time_rule=rule, wall_s=wall, fft_pairs=int(np.sum(col.s["fft_pairs"])),
                iterations=int(np.sum(col.s["iterations"])))
     return row, {f"{case}_a3": err}
@@ -295,8 +320,9 @@ def plan_runs(args):
                     continue
                 if case == "md":
                     todo.append((case, n, s, "n/a"))
-                else:
-                    todo += [(case, n, s, r) for r in RULES]
+                else:   # the step-start rule: refused for Kelvin-Voigt, unstable for Zener 100
+                    todo += [(case, n, s, r) for r in RULES
+                             if not (case in STIFF and r == "step_start")]
     return todo
 
 
@@ -398,13 +424,17 @@ def presets(rows):
     - steps per cycle: the viscoelastic fretting case's (loop, traction, pressure against
       its reference), at least the elastic loop's;
     - steps per relaxation time: the largest of the Lee-Radok cases' and the viscoelastic
-      fretting case's (its window is one relaxation time).
+      fretting case's (its window is one relaxation time);
+    - the "bdf2" columns (a body whose memory takes "bdf2": little instantaneous
+      elasticity under "auto"): steps per retardation time from the Kelvin-Voigt and
+      Zener E0/Einf = 100 ramps (``lr_kv``, ``lr_zener100``; at least the plain column),
+      steps per cycle from the viscoelastic fretting case with the "bdf2" rule.
     """
     out = {}
     lr_cases = sorted({r["case"] for r in rows if r["case"].startswith("lr_")})
     for name, target in PRESETS.items():
         entry = {"target": target, "time_rule": PRESET_RULE}
-        notes, cells, per_cycle, per_relax = [], [], [], []
+        notes, cells, per_cycle, per_relax, per_relax_bdf2 = [], [], [], [], []
         md = cheapest(rows, PRESET_MEASURES["md"], target)
         if md:
             cells.append(md["row"]["cells_across"])
@@ -428,7 +458,8 @@ def presets(rows):
             if lr:
                 lr_runs[case] = _run_info(lr, (m,))
                 cells.append(lr["row"]["cells_across"])
-                per_relax.append(lr["row"]["steps_per_unit"])
+                (per_relax_bdf2 if case in STIFF else per_relax).append(
+                    lr["row"]["steps_per_unit"])
             else:
                 notes.append(f"{case}: a^3 not within {target:g} on any grid/steps measured")
         entry["lee_radok"] = lr_runs
@@ -445,6 +476,13 @@ def presets(rows):
         entry["steps_per_cycle"] = int(math.ceil(round(max(per_cycle), 6))) if per_cycle else None
         entry["steps_per_relaxation"] = (int(math.ceil(round(max(per_relax), 6))) if per_relax
                                          else None)
+        if per_relax_bdf2:
+            entry["steps_per_relaxation_bdf2"] = int(math.ceil(round(max(
+                per_relax_bdf2 + per_relax), 6)))
+        vf2 = cheapest(rows, PRESET_MEASURES["vf"], target, rule="bdf2", case="vf")
+        if vf2:
+            entry["steps_per_cycle_bdf2"] = int(math.ceil(round(max(
+                [vf2["row"]["steps_per_unit"]] + per_cycle), 6)))
         entry["reached"] = not notes
         if notes:
             entry["notes"] = notes
@@ -457,7 +495,8 @@ def recommendation(rows):
     for target in (0.05, 0.01, 0.002):
         lines.append(f"target {target:.1%}:")
         for measure in ("md_stick", "md_traction", "md_traction_mean", "md_energy", "hertz_p0",
-                        "hertz_a", "lr_step_a3", "lr_ramp_a3", "lr_zener_a3", "vf_loop",
+                        "hertz_a", "lr_step_a3", "lr_ramp_a3", "lr_zener_a3", "lr_kv_a3",
+                        "lr_zener100_a3", "vf_loop",
                         "vf_traction", "vf_pressure"):
             if not any(r["measure"] == measure for r in rows):
                 continue
@@ -467,6 +506,8 @@ def recommendation(rows):
                 what = MEASURE_LABEL[measure] + (f" ({rule} rule)" if rule else "")
                 if best is None:
                     b = best_for(rows, measure, rule)
+                    if b is None:                 # the rule did not run for this case
+                        continue
                     lines.append(f"  {what}: not reached (best {b['error']:.2%} at "
                                  f"{b['cells_across']:.0f} cells across, {b['steps']} steps)")
                     continue
@@ -599,7 +640,10 @@ def main(argv=None):
             "cycle, from the viscoelastic fretting loop (rigid ball on Maxwell, tau = t') "
             "against a 4x finer time mesh (loop, traction and pressure RMS), at least the "
             "elastic loop's. steps_per_relaxation: per relaxation (retardation) time, the "
-            "largest needed by the Lee-Radok cases and the viscoelastic fretting loop."),
+            "largest needed by the Lee-Radok cases and the viscoelastic fretting loop. "
+            "steps_per_relaxation_bdf2, steps_per_cycle_bdf2: the same where a body's "
+            "memory takes the rule bdf2 (Kelvin-Voigt and Zener E0/Einf = 100 ramps; the "
+            "fretting loop with bdf2)."),
             "presets": pre}, f, indent=2, default=float)
     print(f"wrote {pre_path}")
     print("\nRecommendation (cheapest measured run reaching each target):")
@@ -608,7 +652,9 @@ def main(argv=None):
     for name, e in pre.items():
         print(f"  {name:9s} target {e['target']:.1%}: {e['cells_across_contact']} cells across "
               f"the contact, {e['steps_per_cycle']} steps per cycle, "
-              f"{e['steps_per_relaxation']} steps per relaxation time"
+              f"{e['steps_per_relaxation']} steps per relaxation time; with bdf2 "
+              f"{e.get('steps_per_cycle_bdf2')} per cycle, "
+              f"{e.get('steps_per_relaxation_bdf2')} per relaxation time"
               + ("" if e["reached"] else "  (NOT all reached: " + "; ".join(e["notes"]) + ")"))
     return {"csv": csv_path, "nc": nc, "png": png, "presets": pre_path, "rows": rows}
 

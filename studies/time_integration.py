@@ -32,13 +32,20 @@ Parts, each printed as a table:
    tau), the others on 48^2 auto with 20 steps;
 4. the order of the pressure FIELD in dt, on a rigid punch with a spherical face held in
    full contact (no cell enters or leaves), 16^2, W = 1 -> 1.5 kN: observed order from 20
-   / 40 / 80 / 160 steps.
+   / 40 / 80 / 160 steps;
+5. a varying Poisson ratio (shear creep, elastic bulk, nu0 = 0.3; Maxwell and the Prony
+   series, 48^2, 20 steps): the Lee-Radok measures of part 3 with the normal compliance
+   (1 - nu(t))/G(t), and the contact radius at 2 tau against constant nu;
+6. the frictional preload (rigid on Maxwell, nu = 0.3, mu = 0.1, 32^2 and 64^2): the q
+   field at t0 after n sub-steps against a 256-sub-step path, uniform fractions k/n
+   against the graded (k/n)^2 the package uses, and the estimate it records.
 
     python studies/time_integration.py [--out DIR] [--quick]
 
 Writes ``time_integration.csv`` (every measured row), ``time_integration.png`` (the
 figure of docs/figures/) and prints the tables. ``--quick``: small grids, few steps, two
-laws and three rules in parts 3-4 (a smoke run of seconds). The candidates that are not
+laws and three rules in parts 3-4, one law in part 5, 16^2 in part 6 (a smoke run of
+seconds). The candidates that are not
 rules of the package are memories built here and handed to ``cp.simulate`` by replacing
 ``contactpipe.simulation.make_memory`` for the run (:func:`use_memory`).
 """
@@ -229,21 +236,12 @@ def lee_radok_scene(law, n, steps, size="auto"):
                     solver={"time_rule": "linear", "tolerance": 1e-10})
 
 
-def kelvin_voigt_pressure(r, t, tau=1.0):
-    """Lee-Radok pressure [Pa], Kelvin-Voigt (E the long-term modulus):
-    p = 2E/(pi R (1 - nu^2)) (h + tau dh/dt), h = sqrt(a^2 - r^2)."""
-    a_inf3 = 3 * W * R * (1 - NU ** 2) / (4 * E)
-    a = (a_inf3 * -np.expm1(-t / tau)) ** (1 / 3)
-    h = np.sqrt(np.clip(a ** 2 - np.asarray(r) ** 2, 0.0, None))
-    rate = np.divide(a_inf3 * np.exp(-t / tau) / (3 * tau * a), h, out=np.zeros_like(h),
-                     where=h > 0)
-    return 2 * E / (np.pi * R * (1 - NU ** 2)) * (h + tau * rate)
-
-
-def lee_radok_p(law, r, t):
-    if law == "kelvin_voigt":
-        return kelvin_voigt_pressure(r, t)
-    return an.lee_radok_pressure(r, t, W, R, E, NU, LAWS[law][1], n_steps=1000)
+def lee_radok_p(law, r, t, creep=None):
+    """Lee-Radok p(r, t) [Pa] (analytic.lee_radok_pressure; for Kelvin-Voigt its branch for
+    phi(0) = 0: p = 2E/(pi R (1 - nu^2)) (h + tau dh/dt), E the long-term modulus), with
+    the law's creep function or ``creep`` (the normal compliance of a varying nu)."""
+    return an.lee_radok_pressure(np.asarray(r, float), t, W, R, E, NU,
+                                 LAWS[law][1] if creep is None else creep, n_steps=1000)
 
 
 def zigzag(pc):
@@ -254,12 +252,12 @@ def zigzag(pc):
     return max(amp, default=0.0)
 
 
-def step_load_measures(ds, law, t_min=0.25, t_field=0.5):
+def step_load_measures(ds, law, t_min=0.25, t_field=0.5, creep=None):
     t = ds.time.values
     x = ds.x1.values
     d = float(x[1] - x[0])
     r = np.hypot(*np.meshgrid(x, x, indexing="ij"))
-    creep = LAWS[law][1]
+    creep = LAWS[law][1] if creep is None else creep
     a_ex = an.lee_radok_sphere(t, W, R, E, NU, creep).contact_radius
     a_area = np.sqrt(ds.contact_area.values / np.pi)
     p = ds.p.values
@@ -269,9 +267,9 @@ def step_load_measures(ds, law, t_min=0.25, t_field=0.5):
     field = 0.0
     for k in np.flatnonzero(t >= t_field):
         inside = r < 0.8 * a_ex[k]
-        centre = float(lee_radok_p(law, np.array([0.0]), t[k])[0])
-        field = max(field, float(np.abs(p[k][inside] - lee_radok_p(law, r[inside], t[k])).max()
-                                 / centre))
+        centre = float(lee_radok_p(law, np.array([0.0]), t[k], creep)[0])
+        ref = lee_radok_p(law, r[inside], t[k], creep)
+        field = max(field, float(np.abs(p[k][inside] - ref).max() / centre))
     a3 = (R * np.clip(ds.omega3.values, 0, None)) ** 1.5
     return {"radius_cells": float(np.abs(a_area[late] - a_ex[late]).max() / d),
             "holes": max(int(np.sum((p[k] == 0) & (r < 0.8 * a_ex[k]))) for k in range(1, t.size)),
@@ -347,6 +345,90 @@ def punch_rows(quick, folder):
 
 
 # --------------------------------------------------------------------------- output
+# --------------------------------------------------------------------------- 5: nu(t)
+def poisson_rows(quick):
+    """A shear creep function with an elastic bulk modulus (bulk = "elastic", nu0 = 0.3):
+    the Lee-Radok step load with the normal compliance (1 - nu(t))/G(t)
+    (``Body.normal_creep``), and the contact radius at 2 tau against constant nu."""
+    cases = {"maxwell": (24, 10)} if quick else {"maxwell": (48, 20), "prony3": (48, 20)}
+    rows = []
+    print("\n5. Varying Poisson ratio (shear creep, elastic bulk): Lee-Radok with (1 - nu)/G")
+    for law, (n, steps) in cases.items():
+        sc = lee_radok_scene(law, n, steps, "auto").replace(
+            {"halfspace.bulk": "elastic", "solver.time_rule": "auto"})
+        body = sc.halfspace.body()
+        ds, wall = c.run(sc)
+        m = step_load_measures(ds, law, t_field=0.25, creep=body.normal_creep)
+        ratio = (float(body.normal_creep(2.0)) / float(body.creep(2.0))) ** (1 / 3)
+        rows.append(dict(part="poisson", law=law, rule=ds.attrs["time_rule_resolved"],
+                         grid=n, steps=steps, value=m["field"],
+                         radius_cells=m["radius_cells"], holes=m["holes"],
+                         zigzag=m["zigzag"], a3=m["a3"], radius_ratio=ratio, wall_s=wall))
+        print(f"  {law:13s} {n}^2 {steps:3d} steps ({rows[-1]['rule']}): radius "
+              f"{m['radius_cells']:.2f} cells, holes {m['holes']}, zigzag {m['zigzag']:.1e}, "
+              f"field (t >= 0.25 tau) {m['field']:.2e}, a3 {m['a3']:.1e}; a(2 tau) / a at "
+              f"constant nu = {ratio:.4f}", flush=True)
+    return rows
+
+
+# --------------------------------------------------------------------------- 6: preload
+@contextlib.contextmanager
+def uniform_preload():
+    """cp.simulate with the former uniform preload fractions k/n (replacing
+    ``contactpipe.simulation.preload_fractions`` for the run)."""
+    original = simulation_module.preload_fractions
+    simulation_module.preload_fractions = lambda n: np.arange(1, int(n) + 1) / float(n)
+    try:
+        yield
+    finally:
+        simulation_module.preload_fractions = original
+
+
+def preload_scene(n, substeps):
+    return cp.Scene(name="ti-preload", geometry={"shape": "sphere", "radius": R},
+                    indenter={"material": "rigid"},
+                    halfspace={"material": "viscoelastic", "young": E, "poisson": NU,
+                               **LAWS["maxwell"][0]},
+                    friction={"mu": c.MU}, load={"time": [0.0, 1.0], "normal_force": W},
+                    grid={"points": [n, n], "size": "auto"}, time={"steps": 1},
+                    solver={"preload_substeps": substeps, "tolerance": 1e-10})
+
+
+def preload_rows(quick):
+    """The frictional preload on a coupled pair (rigid on Maxwell, nu = 0.3, mu = 0.1): the
+    q field at t0 against a fine graded path, uniform fractions k/n against graded (k/n)^2,
+    and the recorded estimate; rms over the contact cells over mu p_max."""
+    grids, counts, ref_n = ((16,), (4, 8), 32) if quick else ((32, 64), (4, 8, 16, 32, 64),
+                                                               256)
+    rows = []
+    print("\n6. Frictional preload: q at t0 against a fine path (rms over the contact / "
+          "mu p_max)")
+    for n in grids:
+        ref, _ = c.run(preload_scene(n, ref_n))
+        q_ref = np.stack([ref.q1.values[0], ref.q2.values[0] if "q2" in ref
+                          else 0 * ref.q1.values[0]])
+        p_ref = ref.p.values[0]
+        for grading in ("uniform", "graded"):
+            for m in counts:
+                if grading == "uniform":
+                    with uniform_preload():
+                        ds, wall = c.run(preload_scene(n, m))
+                else:
+                    ds, wall = c.run(preload_scene(n, m))
+                q = np.stack([ds.q1.values[0], ds.q2.values[0] if "q2" in ds
+                              else 0 * ds.q1.values[0]])
+                contact = (p_ref > 0) | (ds.p.values[0] > 0)
+                err = float(np.sqrt(np.sum((q - q_ref) ** 2, axis=0)[contact].mean())
+                            / (c.MU * p_ref.max()))
+                est = ds.attrs.get("preload_error_estimate", math.nan)
+                rows.append(dict(part="preload", law="maxwell", rule=grading, grid=n,
+                                 steps=m, value=err, estimate=est, reference=ref_n,
+                                 fft_pairs=int(ds.fft_pairs.values[0]), wall_s=wall))
+                print(f"  {n}^2 {grading:8s} {m:4d} sub-steps: error {err:.2e}, recorded "
+                      f"estimate {est:.2e}", flush=True)
+    return rows
+
+
 def print_tables(rows):
     print("\n1. Amplification factor of the traction error (largest |g|; (-) when the "
           "largest is negative; worst negative factor in brackets)")
@@ -416,8 +498,8 @@ def plot(rows, keep, out):
                 ax.plot(t[1:], keep[name][1]["pc"][1:] / 1e9, "o-", ms=3, color=color,
                         label=name)
         tt = np.linspace(t[1], t[-1], 200)
-        ax.plot(tt, [kelvin_voigt_pressure(0.0, x) / 1e9 for x in tt], "k--", lw=1,
-                label="Lee–Radok")
+        p_lr = [float(lee_radok_p("kelvin_voigt", [0.0], x)[0]) for x in tt]
+        ax.plot(tt, np.array(p_lr) / 1e9, "k--", lw=1, label="Lee–Radok")
         ax.set_ylim(0, 6)
         ax.set_xlabel("t / τ")
         ax.set_ylabel("centre pressure [GPa]")
@@ -432,7 +514,7 @@ def plot(rows, keep, out):
                 ax.plot(x * 1e3, c.centre_profile(ds.p.values[k]) / 1e9, "o-", ms=2.5,
                         color=color, label=f"{name}, t = {ds.time.values[k]:.2f} τ")
         xs = np.linspace(-0.8e-3, 0.8e-3, 400)
-        ax.plot(xs * 1e3, kelvin_voigt_pressure(np.abs(xs), 0.5) / 1e9, "k--", lw=1,
+        ax.plot(xs * 1e3, lee_radok_p("kelvin_voigt", np.abs(xs), 0.5) / 1e9, "k--", lw=1,
                 label="Lee–Radok")
         ax.set_ylim(0, 5)
         ax.set_xlabel("x1 [mm]")
@@ -466,6 +548,8 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as folder:
         rows += lee_radok_rows(args.quick, keep)
         rows += punch_rows(args.quick, folder)
+    rows += poisson_rows(args.quick)
+    rows += preload_rows(args.quick)
     print_tables(rows)
     csv_path = write_csv(rows, out)
     png = plot(rows, keep, out)

@@ -89,7 +89,7 @@ MISTAKES = [
      r"halfspace\.material must be one of 'rigid', 'elastic', 'viscoelastic', got 'plastic'"),
     ("unknown creep", {"halfspace.creep": "burgers"},
      r"halfspace\.creep must be one of 'maxwell', 'kelvin_voigt', 'zener', 'prony', "
-     r"'tabulated', got 'burgers'"),
+     r"'tabulated', 'fit', got 'burgers'"),
     ("unknown preload", {"load.preload": "none"},
      r"load\.preload must be one of 'frictional', 'frictionless', got 'none'"),
     ("unknown time_rule", {"solver.time_rule": "trapezoid"},

@@ -17,6 +17,7 @@ import fig1_loading  # noqa: E402
 import fig2_elastic_fretting  # noqa: E402
 import fig3_maxwell  # noqa: E402
 import speed_accuracy  # noqa: E402
+import time_integration  # noqa: E402
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -87,6 +88,28 @@ def test_speed_accuracy_quick(tmp_path):
     err = {(r["time_rule"], r["steps"]): r["error"] for r in rows
            if r["measure"] == "lr_ramp_a3" and r["grid"] == 16}
     assert err[("step_start", 10)] > 3 * err[("linear", 10)]
+    # creep laws with little instantaneous elasticity are measured for the presets' "bdf2"
+    # column: "auto" takes "bdf2" for them (its rows repeat the bdf2 run)
+    for case in ("lr_kv", "lr_zener100"):
+        got = {(r["time_rule"], r["steps"]): r["error"] for r in rows
+               if r["measure"] == f"{case}_a3" and r["grid"] == 16}
+        assert got and all(np.isfinite(v) for v in got.values())
+        assert got[("auto", 10)] == got[("bdf2", 10)]
+
+
+def test_time_integration_quick(tmp_path):
+    """studies/time_integration.py --quick runs end to end (seconds) and its rows say what
+    tests/test_time_integration.py says: "bdf2" has no hole on the Kelvin-Voigt case,
+    "linear" has; the pressure fields of its Lee-Radok rows (Kelvin-Voigt included, from
+    analytic.lee_radok_pressure) are finite."""
+    out = time_integration.main(["--quick", "--out", str(tmp_path)])
+    assert_png(out["png"])
+    assert pathlib.Path(out["csv"]).is_file()
+    holes = {r["rule"]: r["holes"] for r in out["rows"]
+             if r["part"] == "lee_radok" and r["law"] == "kelvin_voigt"}
+    assert holes["bdf2"] == 0 and holes["auto"] == 0 and holes["linear"] > 0
+    fields = [r["value"] for r in out["rows"] if r["part"] == "lee_radok"]
+    assert fields and all(np.isfinite(f) for f in fields)
 
 
 def test_extremes_quick(tmp_path):

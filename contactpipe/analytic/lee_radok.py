@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import integrate
 
+from ..materials import ExponentialCreep, relaxation_from_creep
 from ._common import sqrt_plus
 
 __all__ = ["LeeRadokContact", "lee_radok_sphere", "lee_radok_radius",
@@ -214,12 +215,21 @@ def lee_radok_pressure(r, t, normal_force, radius, young, poisson, creep,
     grid. The Stieltjes integral uses the same product-trapezoid rule, so the total
     force equals W to round-off (up to the radial quadrature of the user).
 
+    A creep function without instantaneous compliance (phi(0) = 0: Kelvin-Voigt, a
+    Kelvin chain) has a relaxation function with a Dirac part, psi = delta(t)/phi'(0) +
+    psi_r(t) (:func:`contactpipe.materials.relaxation_from_creep`, exact for a sum of
+    exponentials), so ``p = 2 E/(pi R (1 - nu^2)) (dh/dt / phi'(0) + int psi_r dh)`` with
+    dh/dt = a a'/h and a^3 = a_inf^3 phi(t): infinite at the growing edge, and for
+    Kelvin-Voigt ``p = 2 E/(pi R (1 - nu^2)) (h + tau dh/dt)`` (E the long-term modulus).
+    There the integral of psi_r is taken in closed form for Kelvin-Voigt and by the
+    product-trapezoid rule otherwise.
+
     Parameters
     ----------
     r : array_like
         Radii [m].
     t : float
-        Time since the load step [s], >= 0.
+        Time since the load step [s], >= 0 (> 0 when phi(0) = 0).
     normal_force : float
         W [N].
     radius : float
@@ -229,7 +239,8 @@ def lee_radok_pressure(r, t, normal_force, radius, young, poisson, creep,
     poisson : float
         Constant Poisson ratio [1].
     creep : callable
-        Normalised creep function phi [1], phi(0) > 0.
+        Normalised creep function phi [1]; phi(0) > 0, or an
+        :class:`~contactpipe.materials.ExponentialCreep` with phi(0) = 0.
     n_steps : int, optional
         Number of time steps over [0, t] (default 2000).
 
@@ -241,6 +252,9 @@ def lee_radok_pressure(r, t, normal_force, radius, young, poisson, creep,
     r = np.asarray(r, float)
     t = float(t)
     pref = 2.0 * young / (np.pi * radius * (1.0 - poisson ** 2))
+    if float(creep(0.0)) == 0.0:
+        return pref * _zero_origin_pressure(r, t, normal_force, radius, young, poisson,
+                                            creep, n_steps)
     if t <= 0.0:
         a0 = lee_radok_sphere(0.0, normal_force, radius, young, poisson, creep).contact_radius
         return pref / float(creep(0.0)) * sqrt_plus(float(a0), r)
@@ -250,3 +264,29 @@ def lee_radok_pressure(r, t, normal_force, radius, young, poisson, creep,
     w = 0.5 * (psi[::-1][:-1] + psi[::-1][1:])          # (psi_{n-k} + psi_{n-k-1})/2
     val = psi[-1] * h[0] + w @ np.diff(h, axis=0)
     return (pref * val).reshape(r.shape)
+
+
+def _zero_origin_pressure(r, t, normal_force, radius, young, poisson, creep, n_steps):
+    """dh/dt / phi'(0) + int psi_r dh [m] (see :func:`lee_radok_pressure`)."""
+    if not isinstance(creep, ExponentialCreep):
+        raise ValueError("phi(0) = 0 (no instantaneous elasticity): the relaxation "
+                         "function has a Dirac part; lee_radok_pressure needs an "
+                         "ExponentialCreep for it")
+    if t <= 0.0:
+        raise ValueError(f"phi(0) = 0: the pressure is singular at the load step, t must "
+                         f"be > 0, got {t:g} s")
+    a_inf3 = 3.0 * normal_force * radius * (1.0 - poisson ** 2) / (4.0 * young)
+    a = (a_inf3 * float(creep(t))) ** (1.0 / 3.0)
+    h = sqrt_plus(a, r)
+    a_rate = a_inf3 * float(creep.derivative(t)) / (3.0 * a ** 2)
+    dh = np.divide(a * a_rate, h, out=np.zeros_like(h), where=h > 0)
+    regular = relaxation_from_creep(creep)
+    if not regular.d:                              # psi_r constant: int psi_r dh = psi_r h
+        val = regular.a * h
+    else:
+        s = np.linspace(0.0, t, n_steps + 1)
+        psi = np.asarray(regular(t - s), float)
+        hs = sqrt_plus(((a_inf3 * creep(s)) ** (1.0 / 3.0))[:, None], r.ravel()[None, :])
+        w = 0.5 * (psi[:-1] + psi[1:])
+        val = (w @ np.diff(hs, axis=0)).reshape(r.shape)
+    return dh / float(creep.derivative(0.0)) + val

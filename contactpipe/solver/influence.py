@@ -83,7 +83,8 @@ import numpy as np
 from ..exceptions import SceneError
 
 __all__ = ["KEYS", "IN_PLANE_KEYS", "NORMAL_KEYS", "COUPLING_KEYS", "cell_influence",
-           "offset_grid", "body_kernels", "pair_kernels"]
+           "offset_grid", "body_kernels", "pair_kernels", "cell_influence_parts",
+           "body_kernel_parts"]
 
 #: The nine kernel names, "ij" = displacement along i from traction along j.
 KEYS = ("11", "12", "13", "21", "22", "23", "31", "32", "33")
@@ -278,6 +279,12 @@ def body_kernels(n1, n2, d1, d2, young, poisson):
     s1 = np.arange(n1) * float(d1)
     s2 = np.arange(n2) * float(d2)
     quadrant = cell_influence(s1[:, None], s2[None, :], d1, d2, young, poisson)
+    return _unfold(quadrant, n1, n2)
+
+
+def _unfold(quadrant, n1, n2):
+    """Kernels on the padded grid from their values on the offsets x1, x2 >= 0, by their
+    parities (:func:`body_kernels`)."""
     kernels = {}
     for key, q in quadrant.items():
         p1, p2 = _PARITY[key]
@@ -288,6 +295,77 @@ def body_kernels(n1, n2, d1, d2, young, poisson):
         k[n1 + 1:, n2 + 1:] = (p1 * p2) * q[:0:-1, :0:-1]
         kernels[key] = k
     return kernels
+
+
+def cell_influence_parts(x1, x2, d1, d2, shear_modulus):
+    """The influence coefficients of one cell split by their dependence on nu at fixed G.
+
+    With c_G = 1/(2 pi G) the coefficients of :func:`cell_influence` are linear in nu at a
+    fixed shear modulus (c = (1 + nu)/(pi E) = c_G, c' = (1 - 2 nu) c_G / 2,
+    (1 - nu^2)/(pi E) = (1 - nu) c_G)::
+
+        K11 = c_G (I[1/r] - nu I[Y^2/r^3]),   K22 = c_G (I[1/r] - nu I[X^2/r^3]),
+        K33 = c_G (1 - nu) I[1/r],            K12 = K21 = c_G nu I[XY/r^3],
+        K13 = -c_G (1/2 - nu) I[X/r^2],       K31 = -K13 (and 23, 32 with Y)
+
+    (I[1/r] = I[X^2/r^3] + I[Y^2/r^3]). So K = K_shear + nu K_poisson, the *shear part*
+    scaling with 1/G and the *Poisson part* with nu/G: a body whose Poisson ratio varies
+    in time gives each part its own creep function (1/G(t) and nu(t)/G(t); their
+    differences are the normal compliance (1 - nu)/G and the coupling one (1 - 2 nu)/G).
+
+    Parameters
+    ----------
+    x1, x2 : array_like
+        Relative position of the field point [m].
+    d1, d2 : float
+        Cell sides [m].
+    shear_modulus : float
+        G [Pa].
+
+    Returns
+    -------
+    (dict, dict)
+        K_shear and K_poisson [m/Pa], keys as :func:`cell_influence`.
+    """
+    x1 = np.asarray(x1, dtype=np.float64)
+    x2 = np.asarray(x2, dtype=np.float64)
+    x1, x2 = np.broadcast_arrays(x1, x2)
+    i_r, i_xx, i_yy, i_xy, i_x, i_y = _corner_integrals(x1, x2, 0.5 * float(d1),
+                                                        0.5 * float(d2))
+    cg = 1.0 / (2.0 * np.pi * float(shear_modulus))
+    zero = np.zeros_like(i_r)
+    shear = {"11": cg * i_r, "12": zero, "13": -0.5 * cg * i_x, "21": zero.copy(),
+             "22": cg * i_r, "23": -0.5 * cg * i_y, "31": 0.5 * cg * i_x,
+             "32": 0.5 * cg * i_y, "33": cg * i_r}
+    poisson = {"11": -cg * i_yy, "12": cg * i_xy, "13": cg * i_x, "21": cg * i_xy,
+               "22": -cg * i_xx, "23": cg * i_y, "31": -cg * i_x, "32": -cg * i_y,
+               "33": -cg * i_r}
+    return shear, poisson
+
+
+def body_kernel_parts(n1, n2, d1, d2, shear_modulus):
+    """The shear and Poisson parts of a body's nine kernels on the padded DC-FFT grid
+    (:func:`cell_influence_parts`; laid out as :func:`body_kernels`): the kernels of a
+    Poisson ratio nu are ``shear + nu * poisson``.
+
+    Parameters
+    ----------
+    n1, n2 : int
+        Number of cells along x1 and x2 [1].
+    d1, d2 : float
+        Cell sides [m].
+    shear_modulus : float
+        G [Pa] (for a viscoelastic body, where its creep function is 1).
+
+    Returns
+    -------
+    (dict, dict)
+        The two parts [m/Pa], each of shape ``(2*n1, 2*n2)`` per key.
+    """
+    s1 = np.arange(n1) * float(d1)
+    s2 = np.arange(n2) * float(d2)
+    shear, poisson = cell_influence_parts(s1[:, None], s2[None, :], d1, d2, shear_modulus)
+    return _unfold(shear, n1, n2), _unfold(poisson, n1, n2)
 
 
 def pair_kernels(k1, k2, w1=1.0, w2=1.0):

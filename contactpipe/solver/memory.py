@@ -52,6 +52,14 @@ the jump of the load: H(t0) = φ0 σ_0.
 
 A tabulated φ needs the direct sum (:class:`DirectMemory`, O(k·N) work and memory per
 step: offered, and said so).
+
+A body whose Poisson ratio varies in time (a shear creep function with an elastic bulk
+modulus, :func:`contactpipe.materials.elastic_bulk_parts`) has two kernel parts with their
+own creep functions: :class:`BodyMemory` holds one recursion per part, all with the rule
+:func:`resolve_body_rule` picks for the body. The rules are linear in φ and share their
+coefficients per time constant, so the history of any combination of the parts (the
+normal compliance (1 − ν)/G, the coupling one (1 − 2ν)/G) is the same combination of the
+parts' histories, and the analysis above applies to those physical compliances.
 """
 from __future__ import annotations
 
@@ -59,9 +67,9 @@ import numpy as np
 
 from ..materials import ExponentialCreep
 
-__all__ = ["RecursiveMemory", "DirectMemory", "make_memory", "TIME_RULES", "BDF2_START",
-           "bdf2_weights", "fitted_bdf2_coefficients", "error_amplification", "is_monotone",
-           "resolve_rule"]
+__all__ = ["RecursiveMemory", "DirectMemory", "BodyMemory", "make_memory", "TIME_RULES",
+           "BDF2_START", "bdf2_weights", "fitted_bdf2_coefficients", "error_amplification",
+           "is_monotone", "resolve_rule", "resolve_body_rule"]
 
 TIME_RULES = ("auto", "bdf2", "linear", "step_start")
 
@@ -78,8 +86,12 @@ START_KINDS = ("exponential_euler", "linear", "bdf1")
 def is_monotone(creep: ExponentialCreep, dt: float, rule: str) -> bool:
     """True when no amplification factor of the rule's traction error is negative (or
     complex with a negative real part): the error then never changes sign from one step
-    to the next (:func:`error_amplification`)."""
-    g = error_amplification(creep, dt, rule)
+    to the next (:func:`error_amplification`). False when the rule cannot solve for the
+    current traction, or the constants are beyond float64."""
+    try:
+        g = error_amplification(creep, dt, rule)
+    except (ValueError, np.linalg.LinAlgError):
+        return False      # no weight for the current traction, or constants beyond float64
     # |g| < 1e-6: a zero factor of a Jordan block, split by round-off into ±1e-8
     return bool(np.all((g.real >= -1e-12) | (np.abs(g) < 1e-6)))
 
@@ -111,6 +123,24 @@ def resolve_rule(creep, dt: float, rule: str) -> str:
     if isinstance(creep, ExponentialCreep) and is_monotone(creep, dt, "linear"):
         return "linear"
     return "bdf2"
+
+
+def resolve_body_rule(creeps, dt: float, rule: str) -> str:
+    """The rule of a body whose compliances are ``creeps`` (one rule for all its kernel
+    parts): ``rule`` itself, or for "auto" "linear" when :func:`resolve_rule` gives it
+    for every one of them, else "bdf2".
+
+    Parameters
+    ----------
+    creeps : sequence of ExponentialCreep or TabulatedCreep
+        The body's physical compliances (``Body.rule_creeps``: φ, and with a varying
+        Poisson ratio the normal compliance too).
+    dt : float
+        Time step [s].
+    rule : {"auto", "bdf2", "linear", "step_start"}
+    """
+    rules = {resolve_rule(c, dt, rule) for c in creeps}
+    return rules.pop() if len(rules) == 1 else "bdf2"
 
 
 def _phi1(x):
@@ -479,6 +509,55 @@ class DirectMemory:
         self._past.append(sigma.copy() if self.rule == "bdf2" else sigma - self._prev)
         self._prev = sigma.copy()
         self.k += 1
+
+
+class BodyMemory:
+    """The memories of one body's kernel parts (one recursion per distinct creep function),
+    seen as one memory: the weights are tuples and :meth:`known` a list, one per part.
+
+    Parameters
+    ----------
+    parts : sequence
+        :class:`RecursiveMemory` (or :class:`DirectMemory`) objects, all with one rule.
+    """
+
+    def __init__(self, parts):
+        self.parts = list(parts)
+        self.rule = self.parts[0].rule
+
+    @property
+    def k(self) -> int:
+        return self.parts[0].k
+
+    @property
+    def weight0(self) -> tuple:
+        return tuple(float(m.weight0) for m in self.parts)
+
+    @property
+    def weight(self) -> tuple:
+        return tuple(float(m.weight) for m in self.parts)
+
+    @property
+    def instant_weight(self) -> tuple:
+        return tuple(float(m.instant_weight) for m in self.parts)
+
+    def known(self) -> list:
+        """H_known of each part for the next instant [Pa]."""
+        return [m.known() for m in self.parts]
+
+    def commit(self, sigma) -> None:
+        for m in self.parts:
+            m.commit(sigma)
+
+    def state(self) -> dict:
+        return {f"part{j}_{key}": v for j, m in enumerate(self.parts)
+                for key, v in m.state().items()}
+
+    def load_state(self, state) -> None:
+        for j, m in enumerate(self.parts):
+            prefix = f"part{j}_"
+            m.load_state({key[len(prefix):]: v for key, v in state.items()
+                          if key.startswith(prefix)})
 
 
 def make_memory(creep, dt, rule, shape):

@@ -3,7 +3,12 @@
 ``u = K ⊛ [q1, q2, p]`` with the pair kernels of paper eq. (8) (docs/conventions.md).
 Each body's kernel spectra are computed once per (grid, body) and cached for the process;
 the operator of a time step is a linear combination of them, weighted by the creep
-factors of the time rule (paper eq. 9), formed once per run in spectral space.
+factors of the time rule (paper eq. 9), formed once per distinct tuple of weights in
+spectral space. A body with a constant Poisson ratio has one set of kernels; one whose
+Poisson ratio varies in time has two *parts* (shear and Poisson,
+:func:`~contactpipe.solver.influence.body_kernel_parts`), each weighted by its own creep
+function: the operator of an instant is then the weighted sum of the parts, formed once,
+and applying it costs the same FFT pairs.
 """
 from __future__ import annotations
 
@@ -12,10 +17,11 @@ from functools import lru_cache
 import numpy as np
 
 from .convolution import Convolver
-from .influence import body_kernels, pair_kernels
+from .influence import body_kernel_parts, body_kernels, pair_kernels
 
-__all__ = ["BodySpectra", "ContactOperator", "body_spectra", "convolver", "history_kernels",
-           "history_displacement"]
+__all__ = ["BodySpectra", "ContactOperator", "body_spectra", "body_spectra_parts",
+           "convolver", "history_kernels", "history_displacement", "weighted_spectra"]
+
 
 class BodySpectra(dict):
     """Kernel spectra (scaled for the inverse FFT) of one body on one grid: key 'ij'."""
@@ -26,6 +32,13 @@ def _body_spectra_cached(n1, n2, d1, d2, young, poisson, backend, threads):
     conv = convolver(n1, n2, backend, threads)
     kernels = body_kernels(n1, n2, d1, d2, young, poisson)
     return BodySpectra({k: conv.kernel_spectrum(v) for k, v in kernels.items()})
+
+
+@lru_cache(maxsize=8)
+def _part_spectra_cached(n1, n2, d1, d2, shear_modulus, backend, threads):
+    conv = convolver(n1, n2, backend, threads)
+    return tuple(BodySpectra({k: conv.kernel_spectrum(v) for k, v in part.items()})
+                 for part in body_kernel_parts(n1, n2, d1, d2, shear_modulus))
 
 
 @lru_cache(maxsize=8)
@@ -42,27 +55,68 @@ def body_spectra(body, n1, n2, d1, d2, backend="auto", threads=1):
                                 float(body.poisson), backend, int(threads))
 
 
+def body_spectra_parts(body, n1, n2, d1, d2, backend="auto", threads=1):
+    """The spectra of a body's kernel parts, one per creep function of
+    ``body.part_creeps`` (cached): ``(body_spectra(...),)`` for a constant Poisson ratio,
+    (shear part, Poisson part) when it varies in time; None for a rigid body."""
+    if body.rigid:
+        return None
+    if not body.split:
+        return (body_spectra(body, n1, n2, d1, d2, backend, threads),)
+    return _part_spectra_cached(int(n1), int(n2), float(d1), float(d2),
+                                float(body.shear_modulus), backend, int(threads))
+
+
+def weighted_spectra(parts, weights):
+    """A body's kernel spectra and weight for :func:`pair_kernels`: (spectra, w) of a
+    single part as they are (so a constant Poisson ratio computes exactly as before),
+    (sum_j w_j S_j, 1) of several, (None, 0) for none or all weights 0.
+
+    Parameters
+    ----------
+    parts : BodySpectra, sequence of BodySpectra, or None
+    weights : float or sequence of float
+        One creep weight per part [1].
+    """
+    if parts is None:
+        return None, 0.0
+    if isinstance(parts, BodySpectra):
+        parts = (parts,)
+    w = tuple(float(x) for x in np.atleast_1d(weights))
+    if len(w) != len(parts):
+        raise ValueError(f"{len(parts)} kernel parts with {len(w)} weights")
+    if all(x == 0.0 for x in w):
+        return None, 0.0
+    if len(parts) == 1:
+        return parts[0], w[0]
+    total = BodySpectra({key: sum(wj * part[key] for wj, part in zip(w, parts) if wj != 0.0)
+                         for key in parts[0]})
+    return total, 1.0
+
+
 class ContactOperator:
     """Relative displacement of a body pair from cell tractions, on one grid.
 
     Parameters
     ----------
-    spectra1, spectra2 : BodySpectra or None
-        Spectra of the indenter (body 1) and half-space (body 2); None when rigid.
-    w1, w2 : float
-        Creep weights of the current traction increment for each body [1]
-        (1 for elastic bodies).
+    spectra1, spectra2 : BodySpectra, tuple of BodySpectra, or None
+        Spectra of the indenter (body 1) and half-space (body 2), or of their kernel parts
+        (:func:`body_spectra_parts`); None when rigid.
+    w1, w2 : float or tuple of float
+        Creep weights of the current traction increment for each body [1] (1 for elastic
+        bodies), one per kernel part.
     conv : Convolver
         The convolution engine of the grid (it counts the FFT pairs).
     """
 
     def __init__(self, spectra1, spectra2, w1, w2, conv: Convolver):
         self.conv = conv
-        self.w1, self.w2 = float(w1), float(w2)
-        s1 = spectra1 if (spectra1 is not None and self.w1 != 0.0) else None
-        s2 = spectra2 if (spectra2 is not None and self.w2 != 0.0) else None
+        self.w1, self.w2 = (float(w) if np.ndim(w) == 0 else tuple(float(x) for x in w)
+                            for w in (w1, w2))
+        s1, c1 = weighted_spectra(spectra1, self.w1)
+        s2, c2 = weighted_spectra(spectra2, self.w2)
         self.rigid = s1 is None and s2 is None
-        self.k = pair_kernels(s1, s2, self.w1, self.w2) if not self.rigid else None
+        self.k = pair_kernels(s1, s2, c1, c2) if not self.rigid else None
         self._derived = {}          # constants derived from the spectra, computed once
 
     # -- the pieces the inner problems need -------------------------------------------
@@ -131,9 +185,18 @@ class ContactOperator:
 
 def history_kernels(spectra1, spectra2):
     """Each body's kernel spectra with the signs of eq. (8) (body 1: coupling negative), for
-    :func:`history_displacement`; built once per run. None for a body without spectra."""
-    return (None if spectra1 is None else pair_kernels(spectra1, None),
-            None if spectra2 is None else pair_kernels(None, spectra2))
+    :func:`history_displacement`; built once per run. None for a body without spectra; a
+    list (one per part) for a body given by its kernel parts (:func:`body_spectra_parts`)
+    with more than one."""
+    out = []
+    for first, spectra in ((True, spectra1), (False, spectra2)):
+        if spectra is None:
+            out.append(None)
+            continue
+        parts = (spectra,) if isinstance(spectra, BodySpectra) else tuple(spectra)
+        signed = [pair_kernels(p, None) if first else pair_kernels(None, p) for p in parts]
+        out.append(signed[0] if len(signed) == 1 else signed)
+    return tuple(out)
 
 
 def history_displacement(kernels, h1, h2, conv: Convolver, outputs=(1, 2, 3)):
@@ -143,22 +206,27 @@ def history_displacement(kernels, h1, h2, conv: Convolver, outputs=(1, 2, 3)):
     ----------
     kernels : tuple
         (body 1, body 2) signed kernel spectra from :func:`history_kernels`; an entry may be
-        None (rigid, or no history).
-    h1, h2 : sequence of 3 arrays or None
-        History tractions [Pa] for (q1, q2, p) of each body; an entry may be None (zero).
+        None (rigid, or no history), or a list of parts.
+    h1, h2 : sequence of 3 arrays, a list of them (one per kernel part), or None
+        History tractions [Pa] for (q1, q2, p) of each body (of each part); an entry may be
+        None (zero).
     outputs : tuple of int
         Which displacement components to return (1, 2, 3).
 
     Returns
     -------
     ndarray (len(outputs), n1, n2)
-        Relative displacement [m] with the signs of eq. (8).
+        Relative displacement [m] with the signs of eq. (8). One forward transform per
+        non-zero history component and one inverse per output and body, whatever the
+        number of parts.
     """
     out = np.zeros((len(outputs), conv.n1, conv.n2))
     for k, h in zip(kernels, (h1, h2)):
         if k is None or h is None:
             continue
-        rows = [[k[f"{i}{j}"] for j in (1, 2, 3)] for i in outputs]
-        xs = [None if (hj is None or not np.any(hj)) else hj for hj in h]
+        parts = k if isinstance(k, list) else [k]
+        hs = h if isinstance(k, list) else [h]
+        rows = [[p[f"{i}{j}"] for p in parts for j in (1, 2, 3)] for i in outputs]
+        xs = [None if (hj is None or not np.any(hj)) else hj for hp in hs for hj in hp]
         out += conv.convolve_matrix(rows, xs)
     return out
