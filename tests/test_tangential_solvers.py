@@ -282,13 +282,6 @@ def test_solve_vector_full_slip_traction(elastic, full_slip):
     np.testing.assert_allclose(res.q, ref, rtol=0, atol=1e-6 * rho.max())
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "solve_vector returns domega = (0, 0) when no cell sticks (tangential._multiplier "
-    "averages over stick cells only): on the full-slip 6 x 6 case the multiplier that makes "
-    "every slip increment parallel to q is (8.08e-7, 0) m (misalignment 4e-11 of "
-    "max|Aq + b|); with the returned zero the slip increments deviate from the direction "
-    "of q by 0.34 of max|Aq + b|, so simulate would accumulate a wrong omega1, slip s and "
-    "dissipation in such a step"))
 def test_solve_vector_full_slip_multiplier(elastic, full_slip):
     """With every cell slipping, Δω is still the multiplier of the force constraint: the
     slip increments Δs = Δω − (Aq + b) must be parallel to q and dissipating. Reference:
@@ -307,18 +300,9 @@ def test_solve_vector_full_slip_multiplier(elastic, full_slip):
     np.testing.assert_allclose(res.domega, lam, rtol=0, atol=1e-8 * np.abs(lam).max())
 
 
-FULL_SLIP_SHIFT = (
-    "no stick cell pins the shift increment: tangential._multiplier returns 0 when every "
-    "cell slips, so a rigid shift c of the known displacement does not shift domega (it "
-    "stays 0 instead of c = 2.6e-7 m on the 6x6 case) and the slip increments then point "
-    "against q in part of the contact; simulate shows it on the paper's pair "
-    "(test_properties.py::test_full_slip_instant_keeps_the_contact_laws)")
-
-
 @pytest.mark.parametrize("form, regime", [
     ("scalar", "partial slip"), ("vector", "partial slip"),
-    pytest.param("scalar", "full slip", marks=pytest.mark.xfail(strict=True, reason=FULL_SLIP_SHIFT)),
-    pytest.param("vector", "full slip", marks=pytest.mark.xfail(strict=True, reason=FULL_SLIP_SHIFT)),
+    ("scalar", "full slip"), ("vector", "full slip"),
 ])
 def test_multiplier_follows_a_rigid_shift(elastic, form, regime):
     """Adding a constant c to the known displacement b of the contact cells is a rigid shift:
@@ -394,15 +378,6 @@ def test_disk_project_is_the_cellwise_projection(data):
 
 
 RIM_CASE = (np.array([[[0.0, 1.0]], [[0.0, 1.0]]]), np.array([[0.5, 0.5]]), np.array([0.5, 0.0]))
-NEWTON_DEFECT = (
-    "project_disks_sum's undamped Newton iteration on the multiplier diverges when every "
-    "cell lands on its rim (the Jacobian sum of rim projections turns near-singular): two "
-    "cells, rho = 0.5, y = (0, 0) and (1, 1), target (0.5, 0) gives NaN (nu grows to 1e72 "
-    "in 8 steps) instead of x = (0.084, -0.277), (0.416, 0.277) (SLSQP); it is the "
-    "projection of solve_vector's FISTA fallback, which runs where nearly every cell slips")
-
-
-@pytest.mark.xfail(strict=True, reason=NEWTON_DEFECT)
 def test_project_disks_sum_every_cell_on_the_rim():
     """The smallest case hypothesis found: the projection is finite, feasible and equals
     SLSQP's within 1e-8."""
@@ -413,7 +388,6 @@ def test_project_disks_sum_every_cell_on_the_rim():
     np.testing.assert_allclose(P, ref, rtol=0, atol=1e-8)
 
 
-@pytest.mark.xfail(strict=True, reason=NEWTON_DEFECT)
 @settings(max_examples=100)
 @given(disk_sets(), st.lists(st.floats(-1.0, 1.0), min_size=20, max_size=20),
        st.floats(0.0, 1.0))
