@@ -207,8 +207,9 @@ def project_rows(y, C: Constraints, cells, kind="box", lo=None, hi=None, rho=Non
     -------
     ndarray
         The projection (y where ``cells`` is False). When no point of the set meets the
-        rows (a target beyond what the cells can carry) the result is the best the
-        iteration reached.
+        rows (the target lies beyond a supporting plane of what the cells can carry,
+        checked at every step along the residual) the iteration stops with the best it
+        reached.
     """
     x = y.copy()
     if C.m == 0 or not np.any(cells):
@@ -223,6 +224,11 @@ def project_rows(y, C: Constraints, cells, kind="box", lo=None, hi=None, rho=Non
         def proj(z):
             return box_project(z, ls, hs)
 
+        def support(u):
+            v = u @ Cs                                        # (k,)
+            return float(np.sum(np.maximum(ls * v, np.where(np.isfinite(hs), hs * v,
+                                                            np.where(v > 0, np.inf, 0.0)))))
+
         def jac(z, inside):
             d = box_jacobian(z, ls, hs, inside)
             return (Cs * d) @ Cs.T
@@ -231,6 +237,10 @@ def project_rows(y, C: Constraints, cells, kind="box", lo=None, hi=None, rho=Non
 
         def proj(z):
             return disk_project(z, rs)
+
+        def support(u):
+            v = (u @ Cs).reshape(2, -1)                       # (2, k)
+            return float(np.sum(rs * np.hypot(v[0], v[1])))
 
         def jac(z, over):
             J = disk_jacobian(z, rs, over)
@@ -252,6 +262,9 @@ def project_rows(y, C: Constraints, cells, kind="box", lo=None, hi=None, rho=Non
         size = float(np.abs(F).max())
         if size <= 1e-14 * scale:
             break
+        u = -F / np.linalg.norm(F)
+        if float(u @ f) > support(u) + 1e-12 * scale:
+            break                     # beyond what the cells can carry: no projection
         J = jac(z, flag)
         while damping <= DAMPING[1]:
             step = np.linalg.solve(J + damping * lipschitz * np.eye(C.m), F)

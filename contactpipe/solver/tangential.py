@@ -118,7 +118,7 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
     stick = (bound > 0) & (np.abs(x) < bound * (1.0 - 1e-12))
     if con is not None:
         lam = 0.0
-    elif stick.any():
+    elif _pinned(stick, np.abs(x), bound):
         lam = float(_multiplier((Ax + b1)[None], stick)[0])
     else:
         lam = float(slip_multipliers(Ax + b1, x, bound, None)[0])
@@ -272,20 +272,28 @@ def project_disks_sum(y, rho, target):
     return project_rows(np.where(cells, y, 0.0), con, cells, "disk", rho=rho)
 
 
-def _cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter):
+def _cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter, sliding=None):
     """CG first; where it stalls, the projected gradient to a loose tolerance (it finds the
     slip/stick pattern that pins the multiplier), then CG again from there; the projected
     gradient, which always converges, finishes if CG stalls a second time.
 
     ``cg`` and ``pg`` take (x0, Ax0, tol, budget) and return (x, Ax, iterations, residual,
-    converged). Returns the same tuple, iterations summed.
+    converged). Returns the same tuple, iterations summed. ``sliding(x)``, when given, says
+    that no cell of x sticks: the projected gradient then runs alone (the projected CG
+    stalls where every cell turns on its circle, as in gross slip, while the projected
+    gradient converges in a few dozen iterations there).
     """
     budget = max(1, max_iter // 4)
+    if sliding is not None and np.any(x0) and sliding(x0):
+        return pg(x0, Ax0, tol, max_iter)
     x, Ax, its, err, ok = cg(x0, Ax0, tol, budget)
     if ok:
         return x, Ax, its, err, ok
     x, Ax, more, err, _ = pg(x, Ax, max(tol, 1e-6), budget)
     its += more
+    if sliding is not None and sliding(x):
+        x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
+        return x, Ax, its + more, err, ok
     x, Ax, more, err, ok = cg(x, Ax, tol, budget)
     its += more
     if ok:
@@ -301,12 +309,24 @@ def _multiplier(g, stick):
 def multipliers(con, g, q, bound):
     """The rows' multipliers of a vector solution: fitted to the stick cells, or where
     no cell sticks, to the slip directions (:func:`slip_multipliers`)."""
-    stick = (bound > 0) & (np.hypot(q[0], q[1]) < bound * (1.0 - 1e-12))
+    mag = np.hypot(q[0], q[1])
+    stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
     if con.m == 0:
         return np.zeros(0)
-    if stick.any():
+    if _pinned(stick, mag, bound):
         return con.fit(g, stick)
     return slip_multipliers(g, q, bound, con)
+
+
+#: A stick cell pins the multipliers only when |q| < mu p (1 - DEEP_STICK): a cell within
+#: the solver's tolerance of its bound slips, and its slip increment is not zero [1].
+DEEP_STICK = 1e-6
+
+
+def _pinned(stick, mag, bound) -> bool:
+    """Some cell sticks clearly inside its bound (else the contact slips everywhere, up to
+    the solver's tolerance, and the multipliers follow the slip directions)."""
+    return bool(np.any(stick & (mag < bound * (1.0 - DEEP_STICK))))
 
 
 #: Passes of the active-set fit of :func:`slip_multipliers`.
@@ -411,7 +431,12 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
             x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
         return x, Ax, its, err, ok and not _infeasible(x, con, None, scale, tol_)
 
-    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
+    def sliding(q):
+        mag = np.hypot(q[0], q[1])
+        stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
+        return (bound > 0).any() and not _pinned(stick, mag, bound)
+
+    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter, sliding)
     lam = multipliers(con, Aq + b, q, bound)
     if rows is not None:
         return TangentialResult(q=q, domega=np.zeros(2), Aq=Aq, iterations=its,
