@@ -148,6 +148,11 @@ def _restore_vector(q, rho, con, stick):
     return q
 
 
+#: Iterations of the vector CG without halving its best step before it hands over to
+#: the projected gradient (it stalls where nearly every cell turns on its circle) [1].
+STALL = 50
+
+
 def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
     """Full vector form by projected CG (the fast path of :func:`solve_vector`; ``con``
     the rows, :class:`~contactpipe.solver.cg.Constraints` on (2, N1, N2)).
@@ -170,7 +175,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
       are restored by projecting the stick cells (:func:`_restore_vector`).
 
     Each iteration costs one operator application (two FFT pairs) and a second one when
-    a projection changed the iterate.
+    a projection changed the iterate. It stops, not converged, when :data:`STALL`
+    iterations pass without halving its best step.
     """
     rho = bound
     movable = rho > 0
@@ -184,8 +190,11 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
     sets_old = None
     err = np.inf
     lam = np.zeros(con.m)
+    best, best_it = np.inf, 0
     it = 0
     for it in range(1, max_iter + 1):
+        if it - best_it > STALL:    # no progress: leave it to the projected gradient
+            break
         g = Aq + b
         mag = np.hypot(q[0], q[1])
         at_bound = movable & (mag >= rho * (1.0 - 1e-12))
@@ -252,6 +261,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
             break
         if err < tol:
             break
+        if err < 0.5 * best:
+            best, best_it = err, it
     err = max(float(err), float(np.abs(con.residual(q)).max(initial=0.0)) / scale)
     ok = bool(err < tol) and bool(np.all(np.isfinite(q)))
     lam = multipliers(con, Aq + b, q, rho)
