@@ -228,3 +228,70 @@ def test_torsional_gross_slip_at_run_time():
                                                   r"was lost under load\.moment3 = ") as err:
         cp.simulate(sc)
     assert "\n" not in str(err.value) and "load.rotation3" in str(err.value)
+
+
+# --------------------------------------------------------------------------- API, closed form
+def test_hertz_tilted_closed_form():
+    """The moved Hertz contact carries W, M1, M2 exactly (quadrature on its disc, 1e-9);
+    phi = (M1, M2)/(W R); omega3 = a²/R − R |phi|²/2; no moment: Hertz itself."""
+    from scipy import integrate
+    M1, M2 = -0.1 * W * A_HERTZ, 0.25 * W * A_HERTZ
+    tz = an.hertz_tilted(W, M1, M2, R, E_STAR_STEEL)
+    a, (e1, e2) = tz.contact_radius, tz.centre
+
+    def moment(f):
+        return integrate.dblquad(lambda y, x: tz.pressure(x, y) * f(x, y), e1 - a, e1 + a,
+                                 lambda x: e2 - np.sqrt(max(a * a - (x - e1) ** 2, 0.0)),
+                                 lambda x: e2 + np.sqrt(max(a * a - (x - e1) ** 2, 0.0)),
+                                 epsrel=1e-11)[0]
+
+    assert moment(lambda x, y: 1.0) == pytest.approx(W, rel=1e-9)
+    assert moment(lambda x, y: y) == pytest.approx(M1, rel=1e-9)
+    assert moment(lambda x, y: x) == pytest.approx(M2, rel=1e-9)
+    assert tz.rotation == pytest.approx((M1 / (W * R), M2 / (W * R)), rel=1e-15)
+    assert tz.approach == pytest.approx(a * a / R - R * (tz.rotation[0] ** 2
+                                                         + tz.rotation[1] ** 2) / 2, rel=1e-15)
+    assert tz.moments == pytest.approx((M1, M2), rel=1e-15)
+    plain = an.hertz_tilted(W, 0.0, 0.0, R, E_STAR_STEEL)
+    hz = an.hertz_sphere(W, R, E_STAR_STEEL)
+    assert plain.max_pressure == hz.max_pressure and plain.approach == hz.approach
+
+
+def test_load_programs_and_round_trip():
+    """Load.programs gives the six freedoms at the knots and on the mesh (NaN where not
+    controlled that way, rotations held at 0 where absent); knots() keeps (t, W, T1, T2)
+    with NaN for a displacement-controlled row; the scene reads back equal from its TOML."""
+    sc = make_scene(friction={"mu": MU},
+                    load={"time": [0.0, 1.0, 2.0], "normal_approach": [1e-6, 2e-6, 1e-6],
+                          "tangential_displacement": [[0, 0], [1e-7, 2e-7], [0, 0]],
+                          "moment2": 0.01, "rotation3": [0.0, 1e-3, 0.0]},
+                    time={"steps": 4})
+    prog = sc.load.programs()
+    assert [prog.is_force(i) for i in range(6)] == [False, False, False, False, True, False]
+    np.testing.assert_array_equal(prog.motion[0], [1e-6, 2e-6, 1e-6])
+    np.testing.assert_array_equal(prog.motion[2], [0, 2e-7, 0])
+    np.testing.assert_array_equal(prog.motion[3], 0.0)            # phi1 held at 0
+    np.testing.assert_array_equal(prog.force[4], 0.01)
+    assert np.isnan(prog.force[[0, 1, 2, 3, 5]]).all() and np.isnan(prog.motion[4]).all()
+    assert prog.keys == ("normal_approach", "tangential_displacement",
+                         "tangential_displacement", "", "moment2", "rotation3")
+    mesh = sc.load.programs(4)
+    np.testing.assert_allclose(mesh.motion[5], [0, 5e-4, 1e-3, 5e-4, 0], rtol=1e-15)
+    t, Wk, T1, T2 = sc.load.knots()
+    assert np.isnan(Wk).all() and np.isnan(T1).all() and np.isnan(T2).all()
+    assert cp.Scene.from_toml_text(sc.to_toml()) == sc
+    assert "tangential=vector" in cp.plan(sc).describe()
+    with pytest.raises(cp.SceneError, match=r"^tangential='scalar': load\.rotation3 twists "
+                                            r"the contact; the one-component form cannot "
+                                            r"carry a torque"):
+        cp.plan(sc, tangential="scalar")
+
+
+def test_old_scenes_keep_their_digest():
+    """A scene without the new keys writes none of them: its dict, TOML and digest are
+    those of before (the new keys are absent, not None)."""
+    sc = make_scene(friction={"mu": MU}, load={"time": [0.0, 1.0], "normal_force": W,
+                                                "tangential_force": [0.0, 50.0]})
+    assert set(sc.to_dict()["load"]) == {"time", "normal_force", "tangential_force",
+                                         "preload"}
+    assert sc.digest() == cp.Scene.from_toml_text(sc.to_toml()).digest()
