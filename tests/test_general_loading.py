@@ -13,7 +13,7 @@ import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.testing import assert_contact_laws, contact_law_violations
 
-from helpers import A_HERTZ, E_STAR_STEEL, MU, P0_HERTZ, R, STEEL, W, make_scene
+from helpers import A_HERTZ, E_STAR_STEEL, MU, R, STEEL, W, make_scene
 
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 SERIES = ("M1", "M2", "M3", "phi1", "phi2", "phi3")
