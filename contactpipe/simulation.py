@@ -518,7 +518,12 @@ def _failure(pb, k, T, res) -> ConvergenceError:
                 f"{res.passes} passes (strong coupling: large friction with "
                 f"Dundurs beta = {pb.beta:.2f}); raise "
                 f"solver.max_coupling_passes or take smaller load steps")
-    if not np.isfinite(res.residual):
+    rigid = (pb.op_first if k == 0 else pb.op_next).rigid
+    if rigid and res.failed == "normal":
+        hint += ("; this instant has no instantaneous elasticity (phi(0) = 0): only a "
+                 "normal force without moments can be applied then, not an approach or a "
+                 "tilt")
+    elif not np.isfinite(res.residual):
         hint += ("; the computation overflowed float64 (the forces, moduli or lengths of "
                  "the scene are beyond its range)")
     if res.failed == "normal" and pb.program.general:

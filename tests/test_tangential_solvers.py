@@ -412,7 +412,8 @@ def test_project_disks_sum_is_a_euclidean_projection(data, direction, step):
     z[:, cells] = target[:, None] * rho[cells] / rho.sum()
     d = np.zeros_like(y)
     d[:, cells] = np.asarray(direction[:2 * n]).reshape(2, n)[:, cells.ravel()]
-    d[:, cells] -= d[:, cells].mean(axis=1, keepdims=True)
+    if cells.any():
+        d[:, cells] -= d[:, cells].mean(axis=1, keepdims=True)
     dm = np.hypot(d[0], d[1])
     room = np.where(dm > 0, (rho - np.hypot(z[0], z[1])) / np.where(dm > 0, dm, 1.0), np.inf)
     s = float(room.min()) if np.isfinite(room.min()) else 0.0
