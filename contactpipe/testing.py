@@ -13,8 +13,9 @@ Laws checked at every recorded instant (docs/conventions.md for the signs):
   M1, M2, M3 series equal to the sums of its tractions;
 * complementarity: p ≥ 0, h ≥ 0, h = 0 where p > 0;
 * Coulomb: |q| ≤ μ p (1 + rtol_coulomb), with the archive's map ``mu`` where it has one;
-* dissipation: q · Δs ≥ 0 in slipping cells, and the accumulated dissipation never
-  decreases by more than the solver resolves (solver.tolerance × μ W × the largest slip);
+* dissipation: q · Δs ≥ 0 in slipping cells and the accumulated dissipation never
+  decreases, each up to what the solver resolves (solver.tolerance × the traction scale ×
+  the largest slip, per cell; × μ W, accumulated);
 * stick: Δs = 0 in stick cells (status 1).
 """
 from __future__ import annotations
@@ -158,9 +159,10 @@ def _equilibrium(ds, scene, cell, rtol, bad):
 
 def _dissipation(ds, scene, mu, bad):
     """q·Δs ≥ 0 in slipping cells, no slip increment in stick cells, and an accumulated
-    dissipation that never decreases by more than the solver resolves: its tolerance
-    times mu W times the largest slip increment (the rounding of a step that dissipates
-    nothing), or 1e-12 of the largest dissipation."""
+    dissipation that never decreases, each up to what the solver resolves: its tolerance
+    times the traction and slip scales (the rounding of a step that dissipates nothing;
+    per cell at least 1e-9 of the largest q times the largest slip increment), and for the
+    accumulated dissipation tolerance x mu W x the slip scale, or 1e-12 of its largest."""
     q1 = np.asarray(ds["q1"].values, dtype=float)
     q2 = np.asarray(ds["q2"].values, dtype=float)
     s1 = np.asarray(ds["s1"].values, dtype=float)
@@ -169,16 +171,17 @@ def _dissipation(ds, scene, mu, bad):
     status = np.asarray(ds["status"].values)[1:]
     work = q1[1:] * ds1 + q2[1:] * ds2
     slipping = status == 2
-    qs = max(float(np.abs(q1).max()), float(np.abs(q2).max()), 1e-300)
-    ss = max(float(np.abs(ds1).max()), float(np.abs(ds2).max()), 1e-300)
-    if slipping.any() and work[slipping].min() < -1e-9 * qs * ss:
-        bad.append(f"dissipation: q·Δs < 0 in a slipping cell ({work[slipping].min():.3g})")
-    d = np.asarray(ds["dissipation"].values, dtype=float)
-    W = float(np.abs(ds["W"].values).max())
+    tol = scene.solver.tolerance
     slip_scale = max(float(np.abs(ds["omega1"].values).max()),
                      float(np.abs(ds["omega2"].values).max()),
                      float(np.abs(s1).max()), float(np.abs(s2).max()))
-    resolved = scene.solver.tolerance * float(np.max(mu)) * W * slip_scale
+    qs = max(float(np.abs(q1).max()), float(np.abs(q2).max()), 1e-300)
+    ss = max(float(np.abs(ds1).max()), float(np.abs(ds2).max()), 1e-300)
+    if slipping.any() and work[slipping].min() < -max(1e-9 * qs * ss, tol * qs * slip_scale):
+        bad.append(f"dissipation: q·Δs < 0 in a slipping cell ({work[slipping].min():.3g})")
+    d = np.asarray(ds["dissipation"].values, dtype=float)
+    W = float(np.abs(ds["W"].values).max())
+    resolved = tol * float(np.max(mu)) * W * slip_scale
     allowed = max(resolved, 1e-12 * max(float(np.abs(d).max()), 1e-300))
     if np.any(np.diff(d) < -allowed):
         bad.append(f"dissipation decreases (by {-np.diff(d).min():.3g} J, more than the "

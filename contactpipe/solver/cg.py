@@ -270,8 +270,9 @@ def project_rows(y, C: Constraints, cells, kind="box", lo=None, hi=None, rho=Non
             step = np.linalg.solve(J + damping * lipschitz * np.eye(C.m), F)
             trial = dual(nu + step)
             # ascent of the dual, or (where its change is below rounding) of the residual
+            flat = abs(trial[4] - d) <= 1e-13 * (abs(d) + abs(trial[4]))
             if trial[4] >= d + 1e-4 * float(F @ step) or \
-                    float(np.abs(trial[3]).max()) <= (1.0 - 1e-4) * size:
+                    (flat and float(np.abs(trial[3]).max()) <= (1.0 - 1e-4) * size):
                 damping = max(damping / 10.0, DAMPING[0])
                 break
             damping *= 10.0
