@@ -70,8 +70,10 @@ TERM_FRACTION = 0.01
 
 
 def _tangential_cycles(scene) -> float:
-    """Full cycles of the tangential program: the path length of |T| over 4 T_max."""
-    t, _, T1, T2 = scene.load.knots()
+    """Full cycles of the tangential program: the path length of |T| over 4 T_max (of
+    the imposed displacement when the tangential freedom is displacement-controlled)."""
+    prog = scene.load.programs()
+    T1, T2 = prog.force[1:3] if prog.is_force(1) else prog.motion[1:3]
     T = np.hypot(np.asarray(T1, float), np.asarray(T2, float))
     if T.max() == 0:
         return 0.0

@@ -7,7 +7,8 @@ else spells a unit or a long name.
 Keys of each entry
 ------------------
 dims : tuple of str
-    ``FIELD`` (time, x1, x2) or ``SERIES`` (time,).
+    ``FIELD`` (time, x1, x2), ``SERIES`` (time,) or ``MAP`` (x1, x2): a map written once,
+    not per instant (the mapped friction coefficient).
 units : str
     SI unit (UDUNITS spelling); ``"1"`` for dimensionless numbers and counts.
 long_name : str
@@ -32,12 +33,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FIELD", "SERIES", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS", "REQUIRED_ATTRS",
+__all__ = ["FIELD", "SERIES", "MAP", "MAPS", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS", "REQUIRED_ATTRS",
            "CONVENTIONS", "TANGENTIAL", "STATUS_SEPARATED", "STATUS_STICK", "STATUS_SLIP", "cf_attrs",
            "variables_for"]
 
 FIELD = ("time", "x1", "x2")
 SERIES = ("time",)
+MAP = ("x1", "x2")
 
 CONVENTIONS = "CF-1.10"
 
@@ -78,6 +80,17 @@ VARIABLES: dict[str, dict] = {
                  model=TANGENTIAL),
     "omega3": _v(SERIES, "m", "normal approach of body 1 towards body 2 (> 0 presses)",
                  required=True),
+    "M1": _v(SERIES, "N m", "moment of the pressure about x1, sum of p x2 dA",
+             required=True),
+    "M2": _v(SERIES, "N m", "moment of the pressure, sum of p x1 dA", required=True),
+    "M3": _v(SERIES, "N m", "torque of the shear about x3, sum of (q2 x1 - q1 x2) dA",
+             required=True),
+    "phi1": _v(SERIES, "rad", "rotation of body 1 relative to body 2 about x1 (gap term "
+                              "-phi1 x2)", required=True),
+    "phi2": _v(SERIES, "rad", "rotation of body 1 relative to body 2 (gap term -phi2 x1)",
+               required=True),
+    "phi3": _v(SERIES, "rad", "rotation of body 1 relative to body 2 about x3 (moves its "
+                              "surface by (-phi3 x2, phi3 x1))", required=True),
     "contact_area": _v(SERIES, "m2", "contact area", required=True),
     "stick_area": _v(SERIES, "m2", "stick area", model=TANGENTIAL),
     "dissipation": _v(SERIES, "J", "frictional energy dissipated so far", model=TANGENTIAL),
@@ -88,6 +101,13 @@ VARIABLES: dict[str, dict] = {
                           model=TANGENTIAL, diagnostic=True),
     "fft_pairs": _v(SERIES, "1", "forward+inverse padded FFT pairs spent on that step",
                     dtype="int32", diagnostic=True),
+}
+
+#: Maps over (x1, x2), written once (not per instant) when the scene has them. Kept apart
+#: from :data:`VARIABLES`, whose names are the per-instant outputs (a sweep dimension may
+#: take a map's name: ``friction.mu`` -> ``mu``).
+MAPS: dict[str, dict] = {
+    "mu": _v(MAP, "1", "friction coefficient (mapped)"),
 }
 
 COORDINATES: dict[str, dict] = {
@@ -113,7 +133,8 @@ _ATTR_KEYS = ("units", "long_name", "flag_values", "flag_meanings")
 
 
 def variables_for(tangential: bool, diagnostics: bool = True) -> list[str]:
-    """The variables of an archive, fields first, in the order of :data:`VARIABLES`.
+    """The variables of an archive, fields first, in the order of :data:`VARIABLES`
+    (the :data:`MAPS`, written once when the scene has them, are not among them).
 
     Parameters
     ----------
@@ -138,7 +159,7 @@ def cf_attrs(name: str) -> dict:
     Ready for netCDF: ``flag_values`` is an array of the variable's own integer type, as
     CF asks.
     """
-    entry = VARIABLES.get(name) or COORDINATES[name]
+    entry = VARIABLES.get(name) or MAPS.get(name) or COORDINATES[name]
     out = {k: entry[k] for k in _ATTR_KEYS if k in entry}
     if "flag_values" in out:
         out["flag_values"] = np.asarray(out["flag_values"], dtype=entry["dtype"])

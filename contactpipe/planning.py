@@ -9,8 +9,10 @@ records it (attribute ``models``).
 slot           model(s)                                 needed when
 =============  ======================================  ===========================================
 normal         ``polonsky_keer``                        always
-tangential     ``scalar`` (Cattaneo-Mindlin, q2 = 0)    μ > 0 and (a tangential load, or coupling)
-               ``vector`` (disk |q| ≤ μp)               the same, and T2 ≠ 0 (or asked for)
+tangential     ``scalar`` (Cattaneo-Mindlin, q2 = 0)    μ > 0 and (a tangential load or
+                                                        displacement, a twist, or coupling)
+               ``vector`` (disk |q| ≤ μp)               the same, and T2 ≠ 0 or ω2 ≠ 0 or a
+                                                        twist (M3 or φ3 given), or asked for
 coupling       ``gauss_seidel`` (normal ↔ tangential)   tangential model and the pair couples
                                                         (Dundurs β ≠ 0 at some instant)
 memory         ``recursive`` / ``direct``               a viscoelastic body and > 1 instant
@@ -104,14 +106,21 @@ def plan(scene, tangential=None, coupling=None) -> Plan:
         Override of the coupling loop. Dropping it on a coupled pair is refused.
     """
     b1, b2 = scene.indenter.body(), scene.halfspace.body()
-    mu = scene.friction.mu
-    t, _, T1, T2 = scene.load.knots()
-    has_T = bool(np.any(np.asarray(T1) != 0) or np.any(np.asarray(T2) != 0))
-    has_T2 = bool(np.any(np.asarray(T2) != 0))
+    mu = scene.friction.largest
+    load = scene.load
+    prog = load.programs()
+    t = prog.t
+    # the tangential row, force or displacement, and the twist row: what moves the shear
+    tang = prog.force[1:3] if prog.is_force(1) else prog.motion[1:3]
+    twist = load.moment3 is not None or load.rotation3 is not None
+    has_T = bool(np.any(tang != 0)) or twist
+    has_T2 = bool(np.any(tang[1] != 0)) or twist
     couples = pair_couples(b1, b2)
     needs_tangential = mu > 0 and (has_T or couples)
 
     choice = tangential or scene.solver.tangential
+    if choice not in RULES["tangential"] + ("auto",):
+        raise SceneError(f"tangential={choice!r}: allowed 'auto', 'scalar', 'vector', 'none'")
     if not needs_tangential:
         if choice not in ("auto", "none"):
             raise SceneError(f"tangential={choice!r}: this scene has no shear to solve "
@@ -122,13 +131,16 @@ def plan(scene, tangential=None, coupling=None) -> Plan:
     elif choice == "none":
         raise SceneError("tangential='none': the scene carries shear (friction.mu > 0 with a "
                          "tangential load or a coupled pair); allowed: 'scalar', 'vector', 'auto'")
+    elif choice == "scalar" and twist:
+        key = "load.moment3" if load.moment3 is not None else "load.rotation3"
+        raise SceneError(f"tangential='scalar': {key} twists the contact; the one-component "
+                         f"form cannot carry a torque. Use 'vector' or 'auto'")
     elif choice == "scalar" and has_T2:
-        raise SceneError("tangential='scalar': load.tangential_force has a component along x2; "
+        key = "load.tangential_force" if prog.is_force(1) else "load.tangential_displacement"
+        raise SceneError(f"tangential='scalar': {key} has a component along x2; "
                          "the one-component form cannot carry it. Use 'vector' or 'auto'")
-    elif choice in ("scalar", "vector"):
-        tang = choice
     else:
-        raise SceneError(f"tangential={choice!r}: allowed 'auto', 'scalar', 'vector', 'none'")
+        tang = choice
 
     coup = "gauss_seidel" if (tang != "none" and couples) else "none"
     if coupling is not None:

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 import tomli_w
 
-from . import geometry as _geometry
+from . import friction_map, geometry as _geometry
 from . import materials
 from .exceptions import SceneError
 from .files import loads_toml
@@ -113,7 +113,9 @@ def hertz_semi_axes(geometry, indenter, halfspace, load, moduli: str = "window")
     with E the instantaneous (glassy) modulus [Pa]; an ellipsoid takes the equivalent
     radius R = sqrt(R1 R2) and a_i = a (R_i / R)^(2/3), whose axis ratio (R1/R2)^(2/3)
     is within 4 % of exact Hertz theory for R1/R2 <= 10. Flat punch: (R, R), the flat
-    end. Computed in logarithms: extreme constants give 0 or inf, never a warning.
+    end. Under approach control (``load.normal_approach``, largest value omega) the
+    contact is a_i = sqrt(R_i omega), whatever the moduli. Computed in logarithms: extreme
+    constants give 0 or inf, never a warning.
 
     Parameters
     ----------
@@ -148,6 +150,10 @@ def hertz_semi_axes(geometry, indenter, halfspace, load, moduli: str = "window")
         log_c = top + math.log(sum(math.exp(x - top) for x in logs))
     radii = (geometry.radius,) * 2 if geometry.shape == "sphere" else geometry.radii
     log_r = 0.5 * (_log(radii[0]) + _log(radii[1]))
+    if load.normal_approach is not None:
+        # the approach is imposed: delta = a^2 / R whatever the moduli
+        omega = float(np.max(np.atleast_1d(load.normal_approach)))
+        return tuple(_exp(0.5 * (_log(r) + _log(omega))) for r in radii)
     w_max = float(np.max(load.knots()[1]))
     log_a = (math.log(0.75) + _log(w_max) + log_r + log_c) / 3.0
     return tuple(_exp(log_a + (2.0 / 3.0) * (_log(r) - log_r)) for r in radii)
@@ -177,6 +183,10 @@ def _check_scene(p: dict, problems: list):
         time = _resolve_time(p, problems)
         _check_step_start_stability(p, time, problems)
         _check_grid(p, problems)
+        if not problems:
+            _check_friction_map(p, problems)
+            _check_tilts(p, problems)
+            _check_twist(p, problems)
     return time
 
 
@@ -230,7 +240,7 @@ def _check_sliding(p, problems):
         return
     t, W, T1, T2 = load.knots()
     T = np.hypot(T1, T2)
-    limit = fric.mu * W
+    limit = fric.largest * W           # NaN where W or T is displacement-controlled
     # |T(t)| - mu W(t) is convex on each segment of the piecewise-linear program
     # (a norm of an affine function minus an affine one), so its largest value on a
     # segment is at a knot: checking the knots checks the whole program.
@@ -242,8 +252,123 @@ def _check_sliding(p, problems):
         rel = "above" if T[k] > limit[k] else "equal to"
         problems.append(
             f"{field} reaches {T[k]:g} N at t = {t[k]:g} s, {rel} friction.mu * W = "
-            f"{limit[k]:g} N (mu = {fric.mu:g}, load.normal_force W = {W[k]:g} N): "
-            f"gross sliding has no static solution. Lower the force or raise mu.")
+            f"{limit[k]:g} N (mu = {fric.largest:g}{' at most' if fric.mapped else ''}, "
+            f"load.normal_force W = {W[k]:g} N): gross sliding has no static solution. "
+            f"Lower the force or raise mu.")
+
+
+def _grid_axes(p):
+    """Cell centres (x1, x2) [m] of the scene's grid (size "auto" resolved), or None."""
+    geo, grid, ind, half, load = (p[k] for k in ("geometry", "grid", "indenter",
+                                                 "halfspace", "load"))
+    if grid is None:
+        return None
+    if grid.size == "auto":
+        if geo is None or geo.shape == "surface" or None in (ind, half, load):
+            return None
+        grid = Grid.make(points=grid.points, size=auto_grid_size(geo, ind, half, load))
+    return grid.coordinates()
+
+
+def _check_friction_map(p, problems):
+    """A mapped mu must cover the grid."""
+    fric = p["friction"]
+    if fric is None or not fric.mapped:
+        return
+    axes = _grid_axes(p)
+    if axes is not None:
+        problems.extend(friction_map.check_mu_file(fric.mu, *axes))
+
+
+#: Tilt rows: (moment key, rotation key, axis the contact moves along (0: x1, 1: x2)).
+_TILTS = (("moment2", "rotation2", 0), ("moment1", "rotation1", 1))
+
+
+def _check_tilts(p, problems):
+    """A tilt that would open the contact, decided from a Hertz estimate where there is one:
+    a sphere or ellipsoid tilted by phi (or loaded off-centre by M/W) keeps its Hertz
+    contact, moved by R phi (or e = M/W) along the axis; it must stay on the grid. A flat
+    punch whose resultant M/W lies beyond its flat end would tip: the contact opens."""
+    geo, load = p["geometry"], p["load"]
+    if geo is None or load is None or geo.shape == "surface":
+        return
+    axes = _grid_axes(p)
+    if axes is None:
+        return
+    t, W = load.knots()[:2]
+    semi = (geo.radius,) * 2 if geo.shape == "flat_punch" else \
+        hertz_semi_axes(geo, p["indenter"], p["halfspace"], load)
+    for mkey, rkey, ax in _TILTS:
+        moment, rotation = getattr(load, mkey), getattr(load, rkey)
+        if moment is None and rotation is None:
+            continue
+        name = ("x1", "x2")[ax]
+        half = float(np.abs(axes[ax]).max())
+        if moment is not None:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                shift = _knot_values(moment, t) / W
+            what, key = "its pressure centre M/W", f"load.{mkey}"
+        else:
+            if geo.shape == "flat_punch":
+                continue          # a tilted punch lifts on one side: a valid contact
+            radius = geo.radius if geo.shape == "sphere" else geo.radii[ax]
+            shift = radius * _knot_values(rotation, t)
+            what, key = "the contact, by R phi,", f"load.{rkey}"
+        k = int(np.nanargmax(np.abs(shift))) if np.isfinite(shift).any() else None
+        if k is None:
+            continue
+        e = float(shift[k])
+        value = show(float(_knot_values(moment if moment is not None else rotation, t)[k]))
+        if geo.shape == "flat_punch":
+            if abs(e) >= geo.radius:
+                problems.append(
+                    f"{key} = {value} at t = {t[k]:g} s puts {what} at {e:.4g} m along "
+                    f"{name}, beyond the flat punch's radius {geo.radius:g} m: the punch "
+                    f"would tip and the contact open; keep |M/W| below the radius")
+            continue
+        if abs(e) + semi[ax] > half:
+            problems.append(
+                f"{key} = {value} at t = {t[k]:g} s moves {what} {e:.4g} m along {name}: "
+                f"with its Hertz semi-axis {semi[ax]:.4g} m the contact would leave the grid "
+                f"(cells up to {half:.4g} m from the centre) and open at its edge; keep the "
+                f"shift below {max(half - semi[ax], 0.0):.4g} m or enlarge grid.size")
+
+
+def _knot_values(values, t):
+    """A program key's values at the knots (a scalar is a step)."""
+    if isinstance(values, tuple):
+        return np.array(values, dtype=float)
+    return np.full(np.shape(t), float(values))
+
+
+def _check_twist(p, problems):
+    """A force-controlled torque at or above that of full sliding (Lubkin: 3 pi mu W a / 16
+    for a Hertz contact, pi mu W a / 4 for a flat punch) has no static solution."""
+    geo, load, fric = p["geometry"], p["load"], p["friction"]
+    if load is None or load.moment3 is None or geo is None or fric is None \
+            or geo.shape not in ("sphere", "flat_punch"):
+        return
+    t, W = load.knots()[:2]
+    if np.isnan(W).any():
+        return
+    M = np.abs(_knot_values(load.moment3, t))
+    if geo.shape == "sphere":
+        a_max = hertz_semi_axes(geo, p["indenter"], p["halfspace"], load)[0]
+        a = a_max * (W / max(float(W.max()), 1e-300)) ** (1.0 / 3.0)
+        limit = 3.0 * np.pi * fric.largest * W * a / 16.0
+        how = "3 pi mu W a / 16 (Lubkin, Hertz a)"
+    else:
+        a = np.full(W.shape, geo.radius)
+        limit = np.pi * fric.largest * W * a / 4.0
+        how = "pi mu W a / 4 (flat punch)"
+    over = np.flatnonzero((M > 0) & (M >= limit))
+    if over.size:
+        k = over[0]
+        problems.append(
+            f"load.moment3 reaches {M[k]:g} N m at t = {t[k]:g} s, at or above the torque "
+            f"of full sliding {how} = {limit[k]:.4g} N m (mu = {fric.largest:g}, W = "
+            f"{W[k]:g} N, a = {a[k]:.4g} m): gross slip has no static solution under force "
+            f"control. Lower the moment, or impose the rotation (load.rotation3)")
 
 
 def _check_tables(p, problems):
@@ -376,8 +501,8 @@ class Scene:
     @classmethod
     def from_dict(cls, d, base_dir=None) -> "Scene":
         """A scene from its nested-dict form (as :meth:`to_dict` gives or TOML reads); a
-        relative ``geometry.file`` is taken relative to ``base_dir`` (default: the
-        current directory)."""
+        relative ``geometry.file`` or ``friction.mu`` file is taken relative to
+        ``base_dir`` (default: the current directory)."""
         if not isinstance(d, Mapping):
             raise SceneError(f"a scene must be a table (dict), got {show(d)}")
         bad = [k for k in d if not isinstance(k, str)]
@@ -385,14 +510,15 @@ class Scene:
             raise SceneError(f"scene keys must be strings, got {show(bad)}; allowed keys: "
                              f"{', '.join(TOP_KEYS)}")
         d = dict(d)
-        for part in ("geometry", "indenter", "halfspace"):   # files of the scene's tables
-            table = d.get(part)
-            if base_dir is not None and isinstance(table, Mapping) and \
-                    isinstance(table.get("file"), str):
-                file = os.path.expanduser(table["file"])
-                if not os.path.isabs(file):
-                    d[part] = {**table, "file": os.path.join(
-                        os.path.abspath(os.fspath(base_dir)), file)}
+        if base_dir is not None:     # files of the scene's tables, relative to its folder
+            for table, key in (("geometry", "file"), ("indenter", "file"),
+                               ("halfspace", "file"), ("friction", "mu")):
+                part = d.get(table)
+                if isinstance(part, Mapping) and isinstance(part.get(key), str):
+                    file = os.path.expanduser(part[key])
+                    if not os.path.isabs(file):
+                        d[table] = {**part, key: os.path.join(
+                            os.path.abspath(os.fspath(base_dir)), file)}
         return cls(**d)
 
     @classmethod
@@ -440,17 +566,15 @@ class Scene:
         the archive, not the physics), ``name`` and the solver options included. A
         surface file counts by its content (its sha256), not its path, so moving it does
         not change the digest and editing it does. Independent of key order, process and
-        platform.
+        platform. A friction map (``friction.mu`` a file) counts by its content too.
         """
         d = self.to_dict()
         del d["output"]
         for part in ("geometry", "indenter", "halfspace"):  # a file counts by its content
             if d[part].get("file") is not None:
-                h = hashlib.sha256()
-                with open(d[part]["file"], "rb") as f:
-                    for chunk in iter(lambda: f.read(1 << 20), b""):
-                        h.update(chunk)
-                d[part]["file"] = "sha256:" + h.hexdigest()
+                d[part]["file"] = _file_digest(d[part]["file"])
+        if self.friction.mapped:
+            d["friction"]["mu"] = _file_digest(self.friction.mu)
         text = json.dumps(d, sort_keys=True, separators=(",", ":"), allow_nan=False)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
@@ -536,6 +660,15 @@ class Scene:
         """The load program on the scene's time mesh: (t [s], W, T1, T2 [N]) arrays of
         length ``time.steps`` + 1."""
         return self.load.instants(self.time.steps)
+
+
+def _file_digest(path) -> str:
+    """'sha256:' and the hex digest of a file's content."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return "sha256:" + h.hexdigest()
 
 
 #: A multi-line array of tomli_w whose items are numbers or inline arrays of numbers.

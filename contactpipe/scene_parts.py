@@ -15,7 +15,6 @@ Units: SI (m, s, N, Pa) everywhere; angles in degrees.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 from dataclasses import dataclass
@@ -23,9 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import geometry as _geometry
-from . import materials
+from . import friction_map, materials
 from .exceptions import SceneError
-from .tables import Field, Reader, is_sequence, show
+from .loading import (MAX_STEPS, ROWS, Programs, knot_steps, per_knot, program_field,
+                      read_program)
+from .tables import Field, Part, Reader, is_sequence, show
 
 __all__ = ["Part", "Geometry", "BodySpec", "Friction", "Fretting", "Load", "Grid",
            "TimeMesh", "Solver", "Output", "knot_steps", "SHAPES", "MATERIALS",
@@ -44,7 +45,6 @@ MIN_POINTS, MAX_POINTS = 8, 4096
 MAX_TOLERANCE = 1e-2
 #: Caps on counts, against absurd sizes (each far beyond a practical simulation).
 MAX_CYCLES = 100_000
-MAX_STEPS = 1_000_000
 MAX_PRELOAD_SUBSTEPS = 10_000
 MAX_THREADS = 1024
 
@@ -74,69 +74,6 @@ def _positive(x) -> bool:
 
 def _at_least_1(n) -> bool:
     return n >= 1
-
-
-def _plain(v):
-    """Tuples -> lists, recursively (TOML and JSON want lists)."""
-    if isinstance(v, (tuple, list)):
-        return [_plain(x) for x in v]
-    return v
-
-
-class Part:
-    """Base of the scene's parts: a frozen dataclass read from its table by :meth:`read`
-    (validated on construction too) and written back by :meth:`to_dict`.
-
-    A subclass sets ``PATH`` (its dotted name when constructed alone, for messages) and
-    ``FIELDS`` (one :class:`~contactpipe.tables.Field` per dataclass field, in file
-    order); it overrides :meth:`read` only to add rules that tie keys together.
-    """
-
-    PATH = ""
-    FIELDS: tuple = ()
-
-    def __post_init__(self):
-        problems = []
-        new = type(self).read(self.to_fields(), self.PATH, problems)
-        if problems or new is None:
-            raise SceneError(problems or [f"{self.PATH}: invalid"])
-        for f in dataclasses.fields(self):
-            object.__setattr__(self, f.name, getattr(new, f.name))
-
-    @classmethod
-    def field(cls, name: str) -> Field:
-        """The description of key ``name``."""
-        return next(f for f in cls.FIELDS if f.name == name)
-
-    @classmethod
-    def read(cls, raw, path: str, problems: list):
-        """The part from its table (a dict), or None with a message per problem appended
-        to ``problems``. The default reads every field with no rule across keys."""
-        r = Reader(raw, path, problems)
-        r.check_keys(cls.FIELDS)
-        values = r.read(cls.FIELDS)
-        return cls.make(**values) if r.ok else None
-
-    @classmethod
-    def make(cls, **values):
-        """An instance from already validated values (no check)."""
-        obj = object.__new__(cls)
-        for f in dataclasses.fields(cls):
-            object.__setattr__(obj, f.name, values.get(f.name))
-        return obj
-
-    def to_fields(self) -> dict:
-        """The fields as they are held (tuples, parts, None for absent)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
-
-    def to_dict(self) -> dict:
-        """The part as a plain dict (lists, floats, ints, str, bool) without its None
-        values (TOML has no null)."""
-        out = {}
-        for k, v in self.to_fields().items():
-            if v is not None:
-                out[k] = v.to_dict() if isinstance(v, Part) else _plain(v)
-        return out
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -416,70 +353,51 @@ class Friction(Part):
 
     Parameters
     ----------
-    mu : float
-        Friction coefficient [1], >= 0; 0 (the default) is frictionless.
+    mu : float or str
+        Friction coefficient [1], >= 0; 0 (the default) is frictionless. Or the path of
+        a netCDF file with a variable ``mu`` over x1, x2 [m] (:mod:`contactpipe.friction_map`),
+        stored as an absolute path (relative to the scene file in ``Scene.from_toml``).
     """
 
-    mu: float = 0.0
+    mu: float | str = 0.0
 
     PATH = "friction"
     FIELDS = (Field("mu", "number", "a finite number >= 0", ok=lambda x: x >= 0,
                     default=0.0, unit="1"),)
 
+    @classmethod
+    def read(cls, raw, path, problems):
+        r = Reader(raw, path, problems)
+        r.check_keys(cls.FIELDS)
+        mu = r.raw.get("mu")
+        if isinstance(mu, (str, os.PathLike)) and os.fspath(mu):
+            mu = os.path.abspath(os.path.expanduser(os.fspath(mu)))
+            r.add(friction_map.check_mu_file(mu))
+            return cls.make(mu=mu) if r.ok else None
+        values = r.read(cls.FIELDS)
+        return cls.make(**values) if r.ok else None
+
+    @property
+    def mapped(self) -> bool:
+        """mu is a map read from a file."""
+        return isinstance(self.mu, str)
+
+    @property
+    def largest(self) -> float:
+        """The largest mu [1] (of the map, when mapped): what decides whether there is
+        friction at all."""
+        if not self.mapped:
+            return float(self.mu)
+        return float(friction_map.largest(self.mu))
+
+    def on_grid(self, x1, x2):
+        """mu at the cell centres: a float, or an (N1, N2) array when mapped [1]."""
+        if not self.mapped:
+            return float(self.mu)
+        return friction_map.mu_on_grid(self.mu, x1, x2)
+
 
 # ----------------------------------------------------------------------------- load
-
-def knot_steps(t, limit: int = MAX_STEPS):
-    """The least number of uniform steps from ``t[0]`` to ``t[-1]`` whose instants hold
-    every knot of ``t``: the least common multiple of the denominators of the knots'
-    positions (t_k - t_0) / (t_n - t_0) written as fractions.
-
-    A knot counts as held when it lies within 1e-9 of a step of an instant (plus the
-    rounding of its float). Returns 0 for a single knot, 1 for two, and None when no
-    such mesh has at most ``limit`` steps (positions incommensurate, or too fine).
-    """
-    t = np.asarray(t, dtype=float)
-    if t.size < 2:
-        return 0
-    span = float(t[-1] - t[0])
-    if not (math.isfinite(span) and span > 0):
-        return None
-    rounding = 8 * np.finfo(float).eps * max(abs(float(t[0])), abs(float(t[-1]))) / span
-    f = (t[1:-1] - t[0]) / span
-    held = np.zeros(f.size, dtype=bool)
-    m = 1
-    while True:
-        # every knot at once on the mesh of m steps; the first one off sets a finer mesh
-        pos = f * m
-        off = np.flatnonzero(~held & (np.abs(pos - np.rint(pos)) > 1e-9 + m * rounding))
-        if off.size == 0:
-            return m
-        q = _least_denominator(float(f[off[0]]), rounding, limit)
-        if q is None:
-            return None
-        if m % q == 0:          # held to 1e-9 of its own step, which m subdivides
-            held[off[0]] = True
-            continue
-        m = m * q // math.gcd(m, q)
-        if m > limit:
-            return None
-
-
-def _least_denominator(f: float, rounding: float, limit: int):
-    """The least q <= limit with |f q - p| <= 1e-9 + q rounding for an integer p, among
-    the continued-fraction convergents p/q of ``f`` (exact on the float); None if none."""
-    num, den = float(f).as_integer_ratio()
-    p0, q0, p1, q1 = 0, 1, 1, 0
-    while den:
-        a, rest = divmod(num, den)
-        p0, q0, p1, q1 = p1, q1, a * p1 + p0, a * q1 + q0
-        if q1 > limit:
-            return None
-        if abs(f * q1 - p1) <= 1e-9 + q1 * rounding:
-            return q1
-        num, den = den, rest
-    return q1 if q1 <= limit else None
-
 
 @dataclass(frozen=True)
 class Fretting(Part):
@@ -551,28 +469,42 @@ def _check_times(t, key):
 
 
 _NORMAL_WHAT = ("a force >= 0 [N] (a step at time[0]) or a list with one force >= 0 [N] "
-                "per load.time knot")
+                "per load.time knot (or give load.normal_approach instead)")
 
 
 @dataclass(frozen=True)
 class Load(Part):
-    """The load program, piecewise linear through knots.
+    """The load program, piecewise linear through knots (:mod:`contactpipe.loading`).
+
+    Each of the six rigid-body freedoms of body 1 relative to body 2 is force-controlled
+    or displacement-controlled (at most one key per row of :data:`loading.ROWS`): a
+    scalar is a step applied at time[0], a list gives one value per knot.
 
     Parameters
     ----------
     time : tuple of float
         Knot times [s], strictly increasing (at least one). Absent (None) with
-        ``fretting``: read the program through :meth:`knots` / :meth:`instants`, which
+        ``fretting``: read the program through :meth:`knots` / :meth:`programs`, which
         serve both forms.
     normal_force : float or tuple of float
-        W [N]: a scalar is a step applied at time[0] (W = value at every instant,
-        time[0] included); a list gives one value per knot.
+        W [N]; required unless ``normal_approach`` is given.
     tangential_force : tuple, optional
-        T [N] per knot: floats along x1 (T2 = 0), or (T1, T2) pairs. Absent: none.
+        T [N] per knot: floats along x1 (T2 = 0), or (T1, T2) pairs. Absent (and no
+        ``tangential_displacement``): T = 0.
     preload : {"frictional", "frictionless"}
         Whether friction acts during the normal preload.
     fretting : Fretting, optional
         A fretting-loop preset instead of ``time`` and ``tangential_force``.
+    normal_approach : float or tuple of float, optional
+        ω3 [m] (> 0 presses the bodies together; the contact may open, W = 0).
+    tangential_displacement : float or tuple, optional
+        ω1 [m], or (ω1, ω2) pairs: rigid displacement of body 1 relative to body 2; the
+        contact may slide as a whole.
+    moment1, moment2, moment3 : float or tuple of float, optional
+        M1 = Δ Σ p x2, M2 = Δ Σ p x1, M3 = Δ Σ (q2 x1 − q1 x2) [N m]; 0 leaves the
+        rotation free.
+    rotation1, rotation2, rotation3 : float or tuple of float, optional
+        φ1, φ2, φ3 [rad]. A rotation whose row is absent is held at 0.
     """
 
     time: tuple | None = None
@@ -580,6 +512,14 @@ class Load(Part):
     tangential_force: tuple | None = None
     preload: str = "frictional"
     fretting: Fretting | None = None
+    normal_approach: float | tuple | None = None
+    tangential_displacement: float | tuple | None = None
+    moment1: float | tuple | None = None
+    moment2: float | tuple | None = None
+    moment3: float | tuple | None = None
+    rotation1: float | tuple | None = None
+    rotation2: float | tuple | None = None
+    rotation3: float | tuple | None = None
 
     PATH = "load"
     FIELDS = (
@@ -593,7 +533,18 @@ class Load(Part):
         Field("preload", "choice", options=PRELOADS, default="frictional"),
         Field("fretting", "table", "amplitude [N], window [s], cycles, direction [deg]",
               part=Fretting),
+        program_field("normal_approach", "m", "an approach omega3"),
+        program_field("tangential_displacement", "m", "a displacement omega", pairs=True),
+        program_field("moment1", "N m", "a moment M1"),
+        program_field("moment2", "N m", "a moment M2"),
+        program_field("moment3", "N m", "a moment M3"),
+        program_field("rotation1", "rad", "a rotation phi1"),
+        program_field("rotation2", "rad", "a rotation phi2"),
+        program_field("rotation3", "rad", "a rotation phi3"),
     )
+    #: The keys read by :func:`loading.read_program` (one value, or one per knot).
+    PROGRAM_KEYS = ("normal_approach", "tangential_displacement", "moment1", "moment2",
+                    "moment3", "rotation1", "rotation2", "rotation3")
 
     @classmethod
     def read(cls, raw, path, problems):
@@ -606,7 +557,7 @@ class Load(Part):
             v["fretting"] = r.value(cls.field("fretting"))
             if v["fretting"] is not None:
                 n = 2 * v["fretting"].cycles + 2
-            for k in ("time", "tangential_force"):
+            for k in ("time", "tangential_force", "tangential_displacement"):
                 if r.has(k):
                     r.add(f"{r.key(k)} = {show(r.raw[k])} cannot be given with {path}."
                           f"fretting: the preset makes the time program and the tangential "
@@ -615,7 +566,14 @@ class Load(Part):
             v["time"] = r.value(cls.field("time"), need=" (or a [load.fretting] preset)",
                                 required=True)
             n = None if v["time"] is None else len(v["time"])
-        v["normal_force"] = _read_normal_force(r, cls.field("normal_force"), n)
+        for row in ROWS:
+            if r.has(row.force_key) and r.has(row.motion_key):
+                r.add(f"{r.key(row.force_key)} and {r.key(row.motion_key)} both control the "
+                      f"{row.name} freedom ({row.what('force')} | {row.what('motion')}): "
+                      f"give one of them")
+        approach = r.has("normal_approach") and not r.has("normal_force")
+        v["normal_force"] = None if approach else \
+            _read_normal_force(r, cls.field("normal_force"), n)
         if r.has("tangential_force") and not r.has("fretting"):
             tf = r.value(cls.field("tangential_force"))
             if tf is not None and n is not None and len(tf) != n:
@@ -623,43 +581,89 @@ class Load(Part):
                       f"{n} knots: give one value per knot")
                 tf = None
             v["tangential_force"] = tf
+        for key in cls.PROGRAM_KEYS:
+            v[key] = read_program(r, cls.field(key), n)
+        if v["normal_approach"] is not None and \
+                max(np.atleast_1d(v["normal_approach"])) <= 0:
+            r.add(f"{r.key('normal_approach')} = {show(r.raw['normal_approach'])} is <= 0 "
+                  f"at every knot: nothing is in contact; give an approach > 0 [m] at some "
+                  f"knot")
         return cls.make(**v) if r.ok else None
 
     @property
     def step_load(self) -> bool:
-        """True when the normal force is a scalar step at time[0]."""
-        return not isinstance(self.normal_force, tuple)
+        """True when the normal row (force or approach) is a scalar step at time[0]."""
+        normal = self.normal_force if self.normal_approach is None else self.normal_approach
+        return not isinstance(normal, tuple)
+
+    def _times(self):
+        if self.fretting is not None:
+            return self.fretting.knots()[0]
+        return np.array(self.time, dtype=float)
+
+    def _tangential(self, values, t):
+        """(first, second) components of a tangential program per knot."""
+        if values is None:
+            return np.zeros_like(t), np.zeros_like(t)
+        if not isinstance(values, tuple):
+            return np.full(t.shape, float(values)), np.zeros_like(t)
+        if isinstance(values[0], tuple):
+            return (np.array([p[0] for p in values], dtype=float),
+                    np.array([p[1] for p in values], dtype=float))
+        return np.array(values, dtype=float), np.zeros_like(t)
 
     def knots(self):
-        """The program at its knots: (time [s], W [N], T1 [N], T2 [N]) float arrays."""
+        """The force program at its knots: (time [s], W [N], T1 [N], T2 [N]) float
+        arrays; NaN in place of a force that is displacement-controlled
+        (``normal_approach``, ``tangential_displacement``: see :meth:`programs`)."""
+        t = self._times()
         if self.fretting is not None:
-            t, T = self.fretting.knots()
+            _, T = self.fretting.knots()
             c, s = self.fretting.unit_vector()
             T1, T2 = T * c, T * s
+        elif self.tangential_displacement is not None:
+            T1 = T2 = np.full(t.shape, np.nan)
         else:
-            t = np.array(self.time, dtype=float)
-            tf = self.tangential_force
-            if tf is None:
-                T1 = np.zeros_like(t)
-                T2 = np.zeros_like(t)
-            elif isinstance(tf[0], tuple):
-                T1 = np.array([p[0] for p in tf], dtype=float)
-                T2 = np.array([p[1] for p in tf], dtype=float)
-            else:
-                T1 = np.array(tf, dtype=float)
-                T2 = np.zeros_like(t)
-        if self.step_load:
+            T1, T2 = self._tangential(self.tangential_force, t)
+        if self.normal_force is None:
+            W = np.full(t.shape, np.nan)
+        elif self.step_load:
             W = np.full(t.shape, self.normal_force, dtype=float)
         else:
             W = np.array(self.normal_force, dtype=float)
         return t, W, T1, T2
 
-    def instants(self, steps: int):
-        """The program on the uniform mesh of ``steps`` + 1 instants from time[0] to
-        time[-1], interpolated linearly between knots: (t [s], W [N], T1 [N], T2 [N])."""
+    def programs(self, steps: int | None = None) -> Programs:
+        """The six programs (:class:`contactpipe.loading.Programs`): at the knots, or on
+        the uniform mesh of ``steps`` + 1 instants from time[0] to time[-1]."""
         t, W, T1, T2 = self.knots()
-        tm = np.linspace(t[0], t[-1], int(steps) + 1)
-        return tm, np.interp(tm, t, W), np.interp(tm, t, T1), np.interp(tm, t, T2)
+        nan = np.full(t.shape, np.nan)
+        om1, om2 = (self._tangential(self.tangential_displacement, t)
+                    if self.tangential_displacement is not None else (nan, nan))
+        force = [W, T1, T2]
+        motion = [per_knot(self.normal_approach, t), om1, om2]
+        keys = ["normal_force" if self.normal_approach is None else "normal_approach",
+                "tangential_force" if self.tangential_displacement is None
+                else "tangential_displacement"]
+        keys.append(keys[-1])
+        for i in (1, 2, 3):
+            m, rot = getattr(self, f"moment{i}"), getattr(self, f"rotation{i}")
+            force.append(per_knot(m, t))
+            motion.append(nan if m is not None else
+                          (np.zeros_like(t) if rot is None else per_knot(rot, t)))
+            keys.append(f"moment{i}" if m is not None else (f"rotation{i}" if rot is not None
+                                                            else ""))
+        out = Programs(t, np.array(force), np.array(motion), tuple(keys))
+        if steps is None:
+            return out
+        return out.on(np.linspace(t[0], t[-1], int(steps) + 1))
+
+    def instants(self, steps: int):
+        """The force program on the uniform mesh of ``steps`` + 1 instants from time[0] to
+        time[-1], interpolated linearly between knots: (t [s], W [N], T1 [N], T2 [N])
+        (NaN where displacement-controlled; :meth:`programs` gives all six)."""
+        p = self.programs(steps)
+        return p.t, p.force[0], p.force[1], p.force[2]
 
     @property
     def window(self) -> float:

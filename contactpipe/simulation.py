@@ -25,9 +25,7 @@ archive writers (:class:`contactpipe.archive.Checkpoint`).
 """
 from __future__ import annotations
 
-import contextlib
-import signal
-import threading
+import dataclasses
 import time as _time
 import warnings
 from dataclasses import dataclass, replace
@@ -40,10 +38,11 @@ from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resu
 from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
                          OutputPathError, SceneError, one_line)
 from .files import LockedError, check_output_path, exclusive_lock
+from .interrupts import Interrupted, raise_if_signalled, signals_as_interrupt
 from .materials import dundurs_beta
 from .nomenclature import variables_for
 from .planning import check_resources, estimate_resources, plan as make_plan
-from .solver.coupling import Previous, Tolerances, solve_instant
+from .solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
 from .solver.memory import BodyMemory, make_memory, resolve_body_rule
 from .solver.normal import NormalResult
 from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
@@ -67,60 +66,6 @@ class ResumeLockedError(LockedError):
 
 class ResumeWarning(UserWarning):
     """The resume state of a target was damaged or unusable: the run starts afresh."""
-
-
-class Interrupted(KeyboardInterrupt):
-    """A termination signal (SIGTERM, SIGHUP) handled as Ctrl-C; ``signum`` says which."""
-
-    def __init__(self, signum: int):
-        super().__init__(f"terminated by {signal.Signals(signum).name}")
-        self.signum = int(signum)
-
-
-#: Termination signals received while :func:`signals_as_interrupt` is active.
-_RECEIVED: list = []
-
-
-@contextlib.contextmanager
-def signals_as_interrupt(names=("SIGTERM", "SIGHUP"), only_default: bool = False):
-    """Inside, the termination signals raise :class:`Interrupted` in the main thread.
-
-    A run then cleans up as on Ctrl-C: temporary files removed, the part file and
-    checkpoint of a resumable run kept. A second such signal during the clean-up is
-    ignored. The march also checks after every instant (:func:`raise_if_signalled`), so a
-    signal whose exception was swallowed (it came while a finalizer ran, where Python only
-    prints exceptions) still ends the run. Outside the main thread (dask workers)
-    nothing is installed; with ``only_default`` only signals still at their default
-    action are taken over (the library's own use, so that an application's handlers win).
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum, frame):
-        signal.signal(signum, signal.SIG_IGN)      # the clean-up is not interrupted again
-        _RECEIVED.append(signum)
-        raise Interrupted(signum)
-
-    previous = {}
-    for name in names:
-        signum = getattr(signal, name, None)      # SIGHUP does not exist on Windows
-        if signum is None or (only_default and signal.getsignal(signum) is not signal.SIG_DFL):
-            continue
-        previous[signum] = signal.signal(signum, handler)
-    try:
-        yield
-    finally:
-        for signum, old in previous.items():
-            signal.signal(signum, old)
-            while signum in _RECEIVED:
-                _RECEIVED.remove(signum)
-
-
-def raise_if_signalled() -> None:
-    """Raise :class:`Interrupted` for a termination signal received (and not yet acted on)."""
-    if _RECEIVED:
-        raise Interrupted(_RECEIVED[0])
 
 
 def grid_coordinates(scene):
@@ -160,6 +105,8 @@ class State:
         Accumulated slip [m].
     omega : ndarray (3,)
         Rigid-body displacement of body 1 relative to body 2 [m].
+    phi : ndarray (3,)
+        Rigid-body rotation of body 1 relative to body 2 (φ1, φ2, φ3) [rad].
     dissipation : float
         Frictional energy dissipated so far [J].
     memories : list
@@ -179,6 +126,7 @@ class State:
     memories: list
     normal: NormalResult | None = None
     k: int = -1
+    phi: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
 
     @classmethod
     def initial(cls, shape, memories) -> "State":
@@ -187,10 +135,15 @@ class State:
         return cls(np.zeros((n1, n2)), np.zeros((2, n1, n2)), np.zeros((3, n1, n2)),
                    np.zeros((2, n1, n2)), np.zeros(3), 0.0, list(memories))
 
+    @property
+    def motion(self) -> np.ndarray:
+        """The six rigid motions reached (ω3, ω1, ω2, φ1, φ2, φ3) [m, rad]."""
+        return np.concatenate([self.omega[[2, 0, 1]], self.phi])
+
     def arrays(self) -> dict:
         """The arrays a checkpoint stores (the last normal solution is not kept)."""
         out = {"p": self.p, "q": self.q, "u": self.u, "s": self.s, "omega": self.omega,
-               "dissipation": np.array(self.dissipation)}
+               "phi": self.phi, "dissipation": np.array(self.dissipation)}
         for i, m in enumerate(self.memories):
             if m is not None:
                 out.update({f"mem{i}_{key}": np.asarray(v) for key, v in m.state().items()})
@@ -206,13 +159,14 @@ class State:
         """
         n1, n2 = self.p.shape
         shapes = {"p": (n1, n2), "q": (2, n1, n2), "u": (3, n1, n2), "s": (2, n1, n2),
-                  "omega": (3,), "dissipation": ()}
+                  "omega": (3,), "phi": (3,), "dissipation": ()}
         for key, shape in shapes.items():
             if np.shape(arrays[key]) != shape:
                 raise ValueError(f"{key} has shape {np.shape(arrays[key])}, expected {shape}")
         self.p, self.q, self.u, self.s = (np.asarray(arrays[key], dtype=float)
                                           for key in ("p", "q", "u", "s"))
         self.omega = np.array(arrays["omega"], dtype=float)
+        self.phi = np.array(arrays["phi"], dtype=float)
         self.dissipation = float(arrays["dissipation"])
         for i, m in enumerate(self.memories):
             if m is not None:
@@ -235,12 +189,13 @@ class _Problem:
         self.gap = np.asarray(scene.geometry.gap(self.x1, self.x2), dtype=float)
         self.steps = _n_steps(scene)
         _warn_off_knots(scene, self.steps)
-        t, W, T1, T2 = scene.load.instants(self.steps)
-        self.t = np.atleast_1d(np.asarray(t, dtype=float))
-        self.W, self.T1, self.T2 = (np.broadcast_to(np.asarray(a, dtype=float), self.t.shape)
-                                    for a in (W, T1, T2))
+        self.program = scene.load.programs(self.steps)
+        self.t = self.program.t
+        # the force programs (NaN where the freedom is displacement-controlled)
+        self.W, self.T1, self.T2 = self.program.force[:3]
         self.dt = float(self.t[1] - self.t[0]) if self.t.size > 1 else 0.0
-        self.mu = float(scene.friction.mu)
+        self.mu = scene.friction.on_grid(self.x1, self.x2)      # a float, or a map
+        self.X1, self.X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
         self.limits = Tolerances(sv.tolerance, sv.max_iterations, sv.max_coupling_passes)
         self.tang = pl.tangential != "none"
         self.bodies = (scene.indenter.body(), scene.halfspace.body())
@@ -328,7 +283,7 @@ class _Problem:
             raise SceneError(
                 f"the influence coefficients overflow float64 ({where}): the moduli, "
                 f"relaxation times or time span are beyond what a computation can hold")
-        p_star = float(np.max(np.abs(self.W))) / self.cell
+        p_star = self._pressure_scale()
         if p_star == 0.0:
             return
         for op in (self.op_first, self.op_next):
@@ -343,6 +298,30 @@ class _Problem:
                     f"square pressures and displacements, so both must lie within "
                     f"{SCALE_RANGE[0]:g} .. {SCALE_RANGE[1]:g}: check the moduli, the "
                     f"relaxation times, load.normal_force and the grid")
+
+    def _pressure_scale(self) -> float:
+        """The largest normal force on one cell [Pa]; under approach control the pressure
+        that moves one cell by the largest approach (an upper bound)."""
+        if self.program.is_force(0):
+            return float(np.max(np.abs(self.W))) / self.cell
+        op = self.op_first if not self.op_first.rigid else self.op_next
+        if op.rigid:
+            return 0.0
+        approach = float(np.nanmax(np.abs(self.program.motion[0])))
+        return approach / max(abs(op.self_influence("33")), 1e-300)
+
+    def controls(self, k, f=1.0):
+        """The six freedoms at instant ``k`` for the solver (a fraction ``f`` of them in a
+        preload sub-step), or None where W and T are force-controlled and the rotations
+        held at zero (the solver's own default)."""
+        if not self.program.general:
+            return None
+        force, motion = self.program.at(k)
+        return Controls(f * force, f * motion, self.x1, self.x2)
+
+    def twist(self):
+        """The in-plane motion (2, N1, N2) of body 1's surface per unit rotation φ3 [m]."""
+        return np.stack([-self.X2, self.X1])
 
     def fractions(self, first, T):
         """The sub-steps of an instant: those of a frictional preload at t0
@@ -500,25 +479,56 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
     T = np.array([pb.T1[k], pb.T2[k]])
     # the normal problem is unchanged from the previous instant: reuse its solution
     same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
-                   and pb.W[k] == pb.W[k - 1] and st.normal is not None)
+                   and _same_normal(pb.program, k) and st.normal is not None)
     iterations = passes = 0
-    for f in pb.fractions(first, T):
+    for f in pb.fractions(first, _drive(pb.program, k)):
         sub = pb.sub_plan(first)
-        previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None)
+        previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None, st.motion)
         res = solve_instant(op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub,
-                            previous, pb.limits)
+                            previous, pb.limits, controls=pb.controls(k, f))
         iterations += res.iterations
         passes += res.passes
         if not res.converged:
             raise _failure(pb, k, T, res)
         _advance(pb, st, op, sub, U, res)
-    st.omega[2] = res.omega3
+        _take_motions(pb, st, k, f, res)
     _check_edges(st.p, k, pb.t[k], pb.scene)
     for m in st.memories:
         if m is not None:
             m.commit(np.stack([st.q[0], st.q[1], st.p]))
     st.k = k
     return _record(pb, st, pb.W[k], T, iterations, passes, pb.conv.pairs - pairs0)
+
+
+def _same_normal(program, k) -> bool:
+    """The normal sub-problem's controls (W | ω3, M1 | φ1, M2 | φ2) are those of k − 1."""
+    rows = [0, 3, 4]
+    return (np.array_equal(program.force[rows, k], program.force[rows, k - 1], equal_nan=True)
+            and np.array_equal(program.motion[rows, k], program.motion[rows, k - 1],
+                               equal_nan=True))
+
+
+def _drive(program, k):
+    """What drives the shear at instant k: the tangential forces, or (where they are not
+    controlled) the tangential motions and the twist (nonzero when anything does)."""
+    force, motion = program.at(k)
+    if not program.general:
+        return force[1:3]
+    return np.nan_to_num(np.concatenate([force[[1, 2, 5]], motion[[1, 2, 5]]]))
+
+
+def _take_motions(pb, st, k, f, res):
+    """The rigid motions reached: the normal's (ω3, φ1, φ2), and the imposed value of
+    every displacement-controlled freedom."""
+    st.omega[2] = res.omega3
+    st.phi[:2] = res.phi
+    if pb.program.general:
+        _, motion = pb.program.at(k)
+        reached = st.motion
+        imposed = ~np.isnan(motion)
+        reached[imposed] = f * motion[imposed]
+        st.omega[:] = reached[[1, 2, 0]]
+        st.phi[:] = reached[3:]
 
 
 def _advance(pb, st, op, sub, U, res):
@@ -530,7 +540,10 @@ def _advance(pb, st, op, sub, U, res):
         res.u[:2] = U[:2] + op.coupling_to_tangential(res.p)
     if pb.tang:
         du = res.u[:2] - st.u[:2]
-        ds = np.where(contact, res.domega[:, None, None] - du, 0.0)
+        rigid = res.domega[:, None, None]
+        if res.dphi3 != 0.0:
+            rigid = rigid + res.dphi3 * pb.twist()
+        ds = np.where(contact, rigid - du, 0.0)
         stick = contact & (np.hypot(res.q[0], res.q[1]) < pb.mu * res.p * (1 - STICK_MARGIN))
         ds[:, stick] = 0.0
         if pb.plan.tangential == "scalar":
@@ -538,13 +551,17 @@ def _advance(pb, st, op, sub, U, res):
         st.s = st.s + ds
         st.dissipation += float(np.sum(res.q * ds)) * pb.cell
         st.omega[:2] += res.domega
+        st.phi[2] += res.dphi3
     st.p, st.q, st.u = res.p, res.q, res.u
     st.normal = res.normal
 
 
 def _failure(pb, k, T, res) -> ConvergenceError:
     """The error of an instant whose solve stopped, naming the sub-problem."""
-    tk, W, mu = pb.t[k], pb.W[k], pb.mu
+    tk, W, mu = pb.t[k], pb.W[k], pb.scene.friction.largest
+    twist = _twist_failure(pb, k, res)
+    if twist is not None:
+        return twist
     if res.failed == "tangential" and np.hypot(*T) >= 0.99 * mu * W > 0:
         return GrossSlidingError(
             f"step {k} (t = {tk:.6g} s): the stick zone was lost under "
@@ -558,21 +575,66 @@ def _failure(pb, k, T, res) -> ConvergenceError:
                 f"{res.passes} passes (strong coupling: large friction with "
                 f"Dundurs beta = {pb.beta:.2f}); raise "
                 f"solver.max_coupling_passes or take smaller load steps")
-    if not np.isfinite(res.residual):
+    rigid = (pb.op_first if k == 0 else pb.op_next).rigid
+    if rigid and res.failed == "normal":
+        hint += ("; this instant has no instantaneous elasticity (phi(0) = 0): only a "
+                 "normal force without moments can be applied then, not an approach or a "
+                 "tilt")
+    elif not np.isfinite(res.residual):
         hint += ("; the computation overflowed float64 (the forces, moduli or lengths of "
                  "the scene are beyond its range)")
+    if res.failed == "normal" and pb.program.general:
+        keys = [key for i, key in zip((3, 4), pb.program.keys[3:5])
+                if key.startswith("moment")]
+        if keys:
+            hint += (f"; a force-controlled {' and '.join('load.' + k_ for k_ in keys)} may "
+                     f"have no solution: the pressure centre M/W must lie inside the "
+                     f"contact the geometry can make")
     return ConvergenceError(
         f"{res.failed} problem at step {k} (t = {tk:.6g} s) stopped after "
         f"{res.iterations} iterations, residual {res.residual:.3g} > tolerance "
-        f"{pb.limits.tol:g} (W = {W:.6g} N, T = ({T[0]:.6g}, {T[1]:.6g}) N){hint}")
+        f"{pb.limits.tol:g} ({_loads(pb, k)}){hint}")
+
+
+def _loads(pb, k) -> str:
+    """The instant's controlled values, for messages: 'W = 1000 N, T = (90, 0) N'."""
+    force, motion = pb.program.at(k)
+    if not pb.program.general:
+        return f"W = {force[0]:.6g} N, T = ({force[1]:.6g}, {force[2]:.6g}) N"
+    units = ("N", "N", "N", "N m", "N m", "N m")
+    parts = []
+    for i, (fname, mname) in enumerate(FREEDOMS):
+        if not np.isnan(force[i]):
+            parts.append(f"{fname} = {force[i]:.6g} {units[i]}")
+        elif motion[i] != 0.0:
+            parts.append(f"{mname} = {motion[i]:.6g} {'m' if i < 3 else 'rad'}")
+    return ", ".join(parts)
+
+
+def _twist_failure(pb, k, res):
+    """A force-controlled torque the contact could not carry: gross slip in torsion."""
+    if res.failed != "tangential" or not pb.program.is_force(5):
+        return None
+    M3 = float(pb.program.force[5, k])
+    return GrossSlidingError(
+        f"step {k} (t = {pb.t[k]:.6g} s): the stick zone was lost under load.moment3 = "
+        f"{M3:.6g} N m ({_loads(pb, k)}; residual {res.residual:.3g}); the contact slides "
+        f"as a whole in torsion, which has no static solution under force control. Lower "
+        f"the moment, or impose the rotation (load.rotation3).")
 
 
 def _check_edges(p, k, tk, scene):
     edge = np.concatenate([p[0], p[-1], p[:, 0], p[:, -1]])
     if np.any(edge > 0):
+        load = scene.load
+        tilts = [f"load.{key}" for key in ("moment1", "moment2", "rotation1", "rotation2")
+                 if getattr(load, key) is not None]
+        why = (f" ({' and '.join(tilts)} moves the contact off-centre: it would open at "
+               f"the grid's edge)" if tilts else "")
         raise GridError(
             f"step {k} (t = {tk:.6g} s): the contact reached the edge of the grid "
-            f"(grid.size = {scene.grid.size}); enlarge grid.size or set grid.size = \"auto\"")
+            f"(grid.size = {scene.grid.size}){why}; enlarge grid.size or set grid.size = "
+            f"\"auto\"")
 
 
 def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
@@ -586,10 +648,11 @@ def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
         status[contact] = 1
         status[slip] = 2
     else:
-        status[contact] = 2 if mu == 0 else 1
+        status[contact] = np.where(np.broadcast_to(np.equal(mu, 0), p.shape), 2, 1)[contact]
     rec = {"p": p, "u3": u[2], "h": h, "status": status, "W": float(p.sum() * cell),
            "omega3": omega[2], "contact_area": float(np.count_nonzero(contact) * cell),
            "iterations": int(iterations), "fft_pairs": int(round(pairs))}
+    rec.update(_moments(pb, st))
     if pb.tang:
         s = st.s
         rec.update({"q1": q[0], "q2": q[1], "u1": u[0], "u2": u[1], "s1": s[0], "s2": s[1],
@@ -598,6 +661,16 @@ def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
                     "stick_area": float(np.count_nonzero(status == 1) * cell),
                     "dissipation": st.dissipation, "coupling_passes": int(passes)})
     return rec
+
+
+def _moments(pb, st) -> dict:
+    """The moments reached (M1 = Δ Σ p x2, M2 = Δ Σ p x1, M3 = Δ Σ (q2 x1 − q1 x2)) [N m]
+    and the rotations (φ1, φ2, φ3) [rad], whichever way each is controlled."""
+    p, q, cell = st.p, st.q, pb.cell
+    M3 = float(np.sum(q[1] * pb.X1 - q[0] * pb.X2)) * cell if pb.tang else 0.0
+    return {"M1": float(np.sum(p * pb.X2)) * cell, "M2": float(np.sum(p * pb.X1)) * cell,
+            "M3": M3, "phi1": float(st.phi[0]), "phi2": float(st.phi[1]),
+            "phi3": float(st.phi[2])}
 
 
 def _warn_off_knots(scene, steps):
@@ -630,6 +703,8 @@ def _start(pb, path, attrs, ckpt):
     out = pb.scene.output
     names = variables_for(pb.tang)
     kw = {"precision": out.precision, "compress": out.compress}
+    if np.ndim(pb.mu):
+        kw["maps"] = {"mu": pb.mu}
     st = State.initial(pb.shape, pb.new_memories())
     if path is None:
         return MemoryWriter(None, pb.x1, pb.x2, names, attrs, **kw), st
@@ -702,7 +777,8 @@ def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds,
 def _inputs(scene):
     """Files the scene reads, which its archive must not overwrite."""
     return [getattr(part, "file", None) for part in (scene.geometry, scene.indenter,
-                                                     scene.halfspace)]
+                                                     scene.halfspace)] + \
+        [scene.friction.mu if scene.friction.mapped else None]
 
 
 def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None,

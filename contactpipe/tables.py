@@ -23,6 +23,7 @@ program's lengths) are written as plain functions by the callers, on top of
 """
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import os
@@ -32,8 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .exceptions import SceneError
+
 __all__ = ["Field", "Reader", "show", "is_number", "is_integer", "is_sequence", "as_list",
-           "to_float", "did_you_mean", "nesting_depth", "MISSING", "KINDS"]
+           "to_float", "did_you_mean", "nesting_depth", "MISSING", "KINDS", "Part"]
 
 #: The kinds a field may have; a tuple of kinds is chosen by the shape of the value.
 KINDS = ("number", "integer", "choice", "bool", "string", "path", "numbers", "integers",
@@ -427,4 +430,69 @@ class Reader:
         for f in fields:
             req = None if require is None else f.name in require
             out[f.name] = self.value(f, need=need, required=req)
+        return out
+
+
+# ------------------------------------------------------------- parts backed by a table
+
+def _plain(v):
+    """Tuples -> lists, recursively (TOML and JSON want lists)."""
+    if isinstance(v, (tuple, list)):
+        return [_plain(x) for x in v]
+    return v
+
+
+class Part:
+    """Base of the scene's parts: a frozen dataclass read from its table by :meth:`read`
+    (validated on construction too) and written back by :meth:`to_dict`.
+
+    A subclass sets ``PATH`` (its dotted name when constructed alone, for messages) and
+    ``FIELDS`` (one :class:`~contactpipe.tables.Field` per dataclass field, in file
+    order); it overrides :meth:`read` only to add rules that tie keys together.
+    """
+
+    PATH = ""
+    FIELDS: tuple = ()
+
+    def __post_init__(self):
+        problems = []
+        new = type(self).read(self.to_fields(), self.PATH, problems)
+        if problems or new is None:
+            raise SceneError(problems or [f"{self.PATH}: invalid"])
+        for f in dataclasses.fields(self):
+            object.__setattr__(self, f.name, getattr(new, f.name))
+
+    @classmethod
+    def field(cls, name: str) -> Field:
+        """The description of key ``name``."""
+        return next(f for f in cls.FIELDS if f.name == name)
+
+    @classmethod
+    def read(cls, raw, path: str, problems: list):
+        """The part from its table (a dict), or None with a message per problem appended
+        to ``problems``. The default reads every field with no rule across keys."""
+        r = Reader(raw, path, problems)
+        r.check_keys(cls.FIELDS)
+        values = r.read(cls.FIELDS)
+        return cls.make(**values) if r.ok else None
+
+    @classmethod
+    def make(cls, **values):
+        """An instance from already validated values (no check)."""
+        obj = object.__new__(cls)
+        for f in dataclasses.fields(cls):
+            object.__setattr__(obj, f.name, values.get(f.name))
+        return obj
+
+    def to_fields(self) -> dict:
+        """The fields as they are held (tuples, parts, None for absent)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def to_dict(self) -> dict:
+        """The part as a plain dict (lists, floats, ints, str, bool) without its None
+        values (TOML has no null)."""
+        out = {}
+        for k, v in self.to_fields().items():
+            if v is not None:
+                out[k] = v.to_dict() if isinstance(v, Part) else _plain(v)
         return out

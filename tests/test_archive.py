@@ -72,6 +72,10 @@ def synthetic_steps():
             "contact_area": float(inside.sum() * cell),
             "stick_area": float((status == 1).sum() * cell),
             "dissipation": dissipation, "iterations": 10 + k,
+            "M1": float((p * X2[None, :]).sum() * cell),
+            "M2": float((p * X1[:, None]).sum() * cell),
+            "M3": float((-q1 * X2[None, :]).sum() * cell),
+            "phi1": 0.0, "phi2": 0.0, "phi3": 0.0,
         }))
     return steps
 
@@ -163,15 +167,18 @@ def test_float32_and_compression(tmp_path):
 
 
 def test_compression_shrinks_a_compressible_archive(tmp_path):
-    big_x1 = np.linspace(-1e-3, 1e-3, 64)
-    big_x2 = np.linspace(-1e-3, 1e-3, 64)
+    """128² zero fields, 3 instants. (The series are stored uncompressed in chunks of a
+    fixed size; with the six moment and rotation series of every archive the fields of a
+    64² grid no longer outweigh them, so the grid is 128².)"""
+    big_x1 = np.linspace(-1e-3, 1e-3, 128)
+    big_x2 = np.linspace(-1e-3, 1e-3, 128)
     names = [n for n, e in VARIABLES.items() if e["required"]]
     sizes = {}
     for compress in (True, False):
         path = tmp_path / f"c{compress}.nc"
         with ArchiveWriter(path, big_x1, big_x2, names, ATTRS, compress=compress) as w:
             for k in range(3):
-                w.append(k, {n: (np.zeros((64, 64)) if VARIABLES[n]["dims"] != ("time",)
+                w.append(k, {n: (np.zeros((128, 128)) if VARIABLES[n]["dims"] != ("time",)
                                  else 0.0) for n in names})
         sizes[compress] = path.stat().st_size
     assert sizes[True] < sizes[False] / 4, sizes

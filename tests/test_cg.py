@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 
-from contactpipe.solver.cg import box_cg, fista, project_box_sum
+from contactpipe.solver.cg import Constraints, box_cg, fista, project_box_sum, project_rows
 
 from helpers import box_kkt_violation, box_qp_exact, spd_matrix
 
@@ -294,3 +294,141 @@ def test_project_box_sum_limits():
     inside = np.array([0.5, -1.5, 0.0, 1.2])
     np.testing.assert_allclose(project_box_sum(inside, lo, hi, inside.sum()), inside,
                                rtol=0, atol=1e-15)
+
+
+# --------------------------------------------------------------------------- constraint rows
+def rows_kkt_violation(A, b, lo, hi, C, x, lam):
+    """The optimality conditions with general rows: bounds, C x = f (relative to Σ|x|),
+    and the residual r = Ax + b − Cᵀλ: 0 on free cells, ≥ 0 at lo, ≤ 0 at hi (relative to
+    max|Ax + b|)."""
+    g = A @ x + b
+    r = g - C.field(lam)
+    xs = max(float(np.abs(x).sum()), 1e-300)
+    gs = max(float(np.abs(g).max()), 1e-300)
+    movable = lo < hi
+    at_lo, at_hi = movable & (x <= lo), movable & (x >= hi)
+    free = movable & ~at_lo & ~at_hi
+    return max(float(np.max(np.maximum(lo - x, 0.0), initial=0.0)) / xs,
+               float(np.max(np.maximum(x - hi, 0.0), initial=0.0)) / xs,
+               float(np.abs(C.residual(x)).max(initial=0.0)) / xs,
+               float(np.max(np.abs(r[free]), initial=0.0)) / gs,
+               float(np.max(-r[at_lo], initial=0.0)) / gs,
+               float(np.max(r[at_hi], initial=0.0)) / gs)
+
+
+def rows_problem(seed, kind, m):
+    """n = 40 cells on a 5 x 8 grid; rows: the sum, then x1 and x2 arms (normalised), as
+    the normal problem's W, M2, M1 (one-sided) or the shear's force and torque-like rows
+    (two-sided); targets from a feasible point."""
+    A, b, lo, hi, _ = problem(200 + seed, 40, kind)
+    x1, x2 = np.meshgrid(np.linspace(-1, 1, 5), np.linspace(-1, 1, 8), indexing="ij")
+    rows = np.array([np.ones(40), x1.ravel(), x2.ravel()])[:m]
+    rng = np.random.default_rng(seed)
+    inside = np.where(np.isfinite(hi), lo + (hi - lo) * rng.uniform(0.2, 0.8, 40),
+                      rng.uniform(0.0, 2.0, 40))
+    return A, b, lo, hi, Constraints(rows, rows @ inside)
+
+
+@pytest.mark.parametrize("seed", range(2))
+@pytest.mark.parametrize("kind, m", [("one-sided", 3), ("one-sided", 2), ("two-sided", 3),
+                                     ("two-sided", 1), ("one-sided", 0), ("two-sided", 0)])
+def test_box_cg_with_rows_kkt_and_slsqp(seed, kind, m):
+    """Up to three rows (or none: a plain bound-constrained problem), n = 40: the
+    optimality conditions with the multipliers hold to 1e-10 (measured <= 8e-14) and SLSQP
+    (ftol 1e-15) finds the same x within 1e-6 of max|x| (measured <= 4e-8)."""
+    A, b, lo, hi, C = rows_problem(seed, kind, m)
+    r = box_cg(lambda x: A @ x, b, lo, hi, C, np.zeros(40), tol=1e-13, max_iter=2000,
+               restore="scale" if kind == "one-sided" else "shift")
+    assert r.converged and np.shape(r.multiplier) == (m,)
+    assert rows_kkt_violation(A, b, lo, hi, C, r.x, r.multiplier) < 1e-10
+    cons = [{"type": "eq", "fun": (lambda x, i=i: C.rows[i] @ x - C.target[i]),
+             "jac": (lambda x, i=i: C.rows[i])} for i in range(m)]
+    ref = minimize(lambda x: objective(A, b, x), np.clip(np.full(40, 0.1), lo, hi),
+                   jac=lambda x: A @ x + b, method="SLSQP",
+                   bounds=[(l_, None if np.isinf(h_) else h_) for l_, h_ in zip(lo, hi)],
+                   constraints=cons, options={"ftol": 1e-15, "maxiter": 2000})
+    np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-6 * np.abs(ref.x).max())
+
+
+def test_box_cg_one_sum_row_equals_the_force_target():
+    """Constraints with the single sum row solve the same problem as the float target:
+    the same x within 1e-12 of max|x| and the same multiplier (1e-12 of max|Ax + b|)."""
+    for kind, restore in (("one-sided", "scale"), ("two-sided", "shift")):
+        A, b, lo, hi, target = problem(3, 20, kind)
+        ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(20), tol=1e-13,
+                     max_iter=500, restore=restore)
+        r = box_cg(lambda x: A @ x, b, lo, hi, Constraints([np.ones(20)], [target]),
+                   np.zeros(20), tol=1e-13, max_iter=500, restore=restore)
+        assert r.converged and ref.converged
+        np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-12 * np.abs(ref.x).max())
+        g = np.abs(A @ ref.x + b).max()
+        assert r.multiplier[0] == pytest.approx(ref.multiplier, rel=0, abs=1e-12 * g)
+
+
+def test_box_cg_without_rows_opens_entirely():
+    """No row, b > 0 everywhere (a gap open everywhere under approach control): x = 0 is
+    the answer, converged at once from zero and from a loaded start."""
+    A, _, lo, hi, _ = problem(4, 12, "one-sided")
+    b = np.linspace(0.1, 1.0, 12)
+    for x0 in (np.zeros(12), np.full(12, 3.0)):
+        r = box_cg(lambda x: A @ x, b, lo, hi, Constraints.none((12,)), x0, tol=1e-12,
+                   max_iter=100)
+        assert r.converged and np.all(r.x == 0)
+
+
+def test_box_cg_never_converges_on_nan():
+    """An operator that returns NaN: converged is False and the residual not finite or
+    above the tolerance, with or without rows."""
+    A, b, lo, hi, target = problem(5, 12, "two-sided")
+
+    def broken(x):
+        return np.full_like(x, np.nan)
+
+    for t in (target, Constraints([np.ones(12)], [target]), Constraints.none((12,))):
+        r = box_cg(broken, b, lo, hi, t, np.zeros(12), tol=1e-9, max_iter=50,
+                   restore="shift")
+        assert not r.converged
+
+
+@settings(max_examples=40)
+@given(st.integers(0, 10_000), st.sampled_from(["box", "disk"]), st.integers(1, 3))
+def test_project_rows_is_the_euclidean_projection(seed, kind, m):
+    """project_rows against SLSQP's projection (min |x − y|² over the set and the rows,
+    ftol 1e-15) on 8 cells, targets from a feasible point: within 1e-6 of the data's scale
+    (SLSQP's accuracy), the rows met to 1e-12, no cell outside its set."""
+    rng = np.random.default_rng(seed)
+    n = 8
+    shape = (2, 4) if kind == "box" else (2, 2, 4)
+    y = rng.standard_normal(shape)
+    if kind == "box":
+        lo, hi = -rng.uniform(0.2, 1.0, (2, 4)), rng.uniform(0.2, 1.0, (2, 4))
+        inside = lo + (hi - lo) * rng.uniform(0.2, 0.8, (2, 4))
+        rows = rng.standard_normal((m, 2, 4))
+        rho = None
+    else:
+        rho = rng.uniform(0.2, 1.0, (2, 4))
+        ang, rad = rng.uniform(0, 2 * np.pi, (2, 4)), rng.uniform(0.1, 0.8, (2, 4))
+        inside = np.stack([rad * rho * np.cos(ang), rad * rho * np.sin(ang)])
+        rows = rng.standard_normal((m, 2, 2, 4))
+        lo = hi = None
+    C = Constraints(rows, [float(np.sum(r * inside)) for r in rows])
+    cells = np.ones((2, 4), dtype=bool)
+    P = project_rows(y, C, cells, kind, lo=lo, hi=hi, rho=rho)
+    assert np.abs(C.residual(P)).max() <= 1e-12 * (1 + np.abs(y).sum())
+    flat = y.ravel()
+    if kind == "box":
+        bounds = list(zip(lo.ravel(), hi.ravel()))
+        ineq = []
+    else:
+        bounds = None
+        ineq = [{"type": "ineq", "fun": lambda x: rho.ravel() ** 2 - x[:n] ** 2 - x[n:] ** 2}]
+    eq = [{"type": "eq", "fun": (lambda x, r=r.ravel(), f=f: r @ x - f)}
+          for r, f in zip(rows, C.target)]
+    ref = minimize(lambda x: 0.5 * np.sum((x - flat) ** 2), inside.ravel(),
+                   jac=lambda x: x - flat, method="SLSQP", bounds=bounds,
+                   constraints=eq + ineq, options={"ftol": 1e-15, "maxiter": 1000})
+    np.testing.assert_allclose(P.ravel(), ref.x, rtol=0, atol=1e-6 * (1 + np.abs(y).max()))
+    if kind == "box":
+        assert np.all(P >= lo) and np.all(P <= hi)
+    else:
+        assert np.all(np.hypot(P[0], P[1]) <= rho * (1 + 1e-12))

@@ -159,5 +159,6 @@ def test_on_step_sees_every_instant_and_the_folder_is_made(tmp_path):
         (k, t, sorted(rec))))
     assert [k for k, _, _ in seen] == [0, 1, 2, 3, 4]
     assert seen[0][2] == sorted(["p", "u3", "h", "status", "W", "omega3", "contact_area",
-                                 "iterations", "fft_pairs"])
+                                 "iterations", "fft_pairs",
+                                 "M1", "M2", "M3", "phi1", "phi2", "phi3"])
     assert ds.sizes["time"] == 5 and target.exists()

@@ -16,6 +16,14 @@ Tangential contact (elastic, Hertzian normal pressure, no coupling: beta = 0)
     :func:`tangential_displacement`, :func:`energy_per_cycle` (arbitrary
     piecewise-monotonic history, Mindlin-Deresiewicz / Masing / Jaeger rule),
     :func:`tangential_compliance_sum`.
+Displacement control and gross slip (a fretting rig)
+    :func:`gross_slip_displacement`, :func:`mindlin_force` (first branch),
+    :func:`displacement_loop_force` (any displacement history, with sliding),
+    :func:`displacement_energy_per_cycle` (E_MD(mu W) + 4 mu W (delta* - delta_gs)).
+Moments
+    :func:`hertz_tilted` (a Hertz contact under tilting moments: moved by M/W, phi = e/R);
+    :func:`torsional_compliance`, :func:`torsional_stiffness`, :func:`full_slip_torque`,
+    :func:`lubkin_torsion`, :func:`lubkin_moment` (torsion of spheres in partial slip).
 Viscoelastic normal contact (rigid sphere, Lee-Radok)
     :func:`lee_radok_sphere`, :func:`lee_radok_radius`, :func:`relaxation_function`,
     :func:`lee_radok_pressure`.
@@ -36,26 +44,37 @@ References
 .. [S65] I. N. Sneddon, "The relation between load and penetration in the
    axisymmetric Boussinesq problem for a punch of arbitrary profile",
    Int. J. Eng. Sci. 3 (1965) 47-57.
+.. [L51] J. L. Lubkin, "The torsion of elastic spheres in contact", J. Appl. Mech. 18
+   (1951) 183-187 (and [J85]_ §7.4).
 .. [Ja98] J. Jaeger, "A new principle in contact mechanics", J. Tribol. 120 (1998)
    677-684 (superposition of Cattaneo distributions for load histories).
 """
 from __future__ import annotations
 
 from ._common import cell_average, composite_modulus, tangential_compliance_sum
-from .hertz import (FlatPunch, HertzEllipsoid, HertzSphere, flat_punch, hertz_ellipsoid,
-                    hertz_sphere)
-from .mindlin import (CattaneoMindlin, cattaneo_mindlin, energy_per_cycle, masing_memory,
-                      mindlin_deresiewicz_traction, stick_radius, tangential_displacement)
+from .hertz import (FlatPunch, HertzEllipsoid, HertzSphere, TiltedHertz, flat_punch,
+                    hertz_ellipsoid, hertz_sphere, hertz_tilted)
+from .mindlin import (CattaneoMindlin, cattaneo_mindlin, displacement_energy_per_cycle,
+                      displacement_loop_force, energy_per_cycle, gross_slip_displacement,
+                      masing_memory, mindlin_deresiewicz_traction, mindlin_force,
+                      stick_radius, tangential_displacement)
+from .torsion import (full_slip_torque, lubkin_moment, lubkin_torsion, torsional_compliance,
+                      torsional_stiffness)
 from .lee_radok import (LeeRadokContact, lee_radok_pressure, lee_radok_radius,
                         lee_radok_sphere, relaxation_function)
 
 __all__ = [
     "composite_modulus", "tangential_compliance_sum",
-    "HertzSphere", "hertz_sphere", "HertzEllipsoid", "hertz_ellipsoid",
+    "HertzSphere", "hertz_sphere", "TiltedHertz", "hertz_tilted",
+    "HertzEllipsoid", "hertz_ellipsoid",
     "FlatPunch", "flat_punch",
     "CattaneoMindlin", "cattaneo_mindlin",
     "masing_memory", "mindlin_deresiewicz_traction", "stick_radius",
     "tangential_displacement", "energy_per_cycle",
+    "gross_slip_displacement", "mindlin_force", "displacement_loop_force",
+    "displacement_energy_per_cycle",
+    "torsional_compliance", "torsional_stiffness", "full_slip_torque", "lubkin_torsion",
+    "lubkin_moment",
     "LeeRadokContact", "lee_radok_sphere", "lee_radok_radius", "relaxation_function",
     "lee_radok_pressure",
     "cell_average",

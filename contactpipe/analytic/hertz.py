@@ -12,8 +12,8 @@ from scipy import integrate, optimize, special
 
 from ._common import check_positive
 
-__all__ = ["HertzSphere", "hertz_sphere", "HertzEllipsoid", "hertz_ellipsoid",
-           "FlatPunch", "flat_punch"]
+__all__ = ["HertzSphere", "hertz_sphere", "TiltedHertz", "hertz_tilted", "HertzEllipsoid",
+           "hertz_ellipsoid", "FlatPunch", "flat_punch"]
 
 
 # --------------------------------------------------------------------------- Hertz
@@ -80,6 +80,85 @@ def hertz_sphere(normal_force, radius, composite_modulus) -> HertzSphere:
     p0 = 3.0 * normal_force / (2.0 * np.pi * a ** 2)
     return HertzSphere(float(normal_force), float(radius), float(composite_modulus),
                        float(a), float(p0), float(a ** 2 / radius))
+
+
+@dataclass(frozen=True)
+class TiltedHertz:
+    """A Hertz sphere contact under a normal force and tilting moments (frictionless).
+
+    A rotation phi of body 1 adds -phi1 x2 - phi2 x1 to the gap r^2 / (2R) (paper eq. 3):
+    the same paraboloid, moved to (R phi2, R phi1) and raised by R (phi1^2 + phi2^2) / 2.
+    On a half-space, translation-invariant, the contact is therefore the Hertz contact of
+    W moved to that centre: its pressure centre is e = (M2/W, M1/W), so phi2 = M2/(W R),
+    phi1 = M1/(W R), and the approach is omega3 = a^2/R - R (phi1^2 + phi2^2)/2.
+
+    Attributes
+    ----------
+    hertz : HertzSphere
+        The centred contact of W.
+    centre : (float, float)
+        (e1, e2) = (M2/W, M1/W) [m], the pressure centre (and the contact's centre).
+    rotation : (float, float)
+        (phi1, phi2) [rad].
+    approach : float
+        omega3 [m].
+    """
+
+    hertz: HertzSphere
+    centre: tuple
+    rotation: tuple
+    approach: float
+
+    @property
+    def max_pressure(self) -> float:
+        """p0 [Pa], that of the centred contact."""
+        return self.hertz.max_pressure
+
+    @property
+    def contact_radius(self) -> float:
+        """a [m], that of the centred contact."""
+        return self.hertz.contact_radius
+
+    @property
+    def moments(self):
+        """(M1, M2) = (W e2, W e1) [N m]."""
+        W = self.hertz.normal_force
+        return W * self.centre[1], W * self.centre[0]
+
+    def pressure(self, x1, x2):
+        """p(x1, x2) [Pa]: the Hertz pressure about the moved centre; 0 outside."""
+        return self.hertz.pressure(np.hypot(np.asarray(x1, float) - self.centre[0],
+                                            np.asarray(x2, float) - self.centre[1]))
+
+
+def hertz_tilted(normal_force, moment1, moment2, radius, composite_modulus) -> TiltedHertz:
+    """A sphere pressed by W and tilted by moments M1 = ∫p x2 dA, M2 = ∫p x1 dA.
+
+    Parameters
+    ----------
+    normal_force : float
+        W [N], > 0.
+    moment1, moment2 : float
+        M1, M2 [N m] (any sign; the contact moves to (M2/W, M1/W)).
+    radius : float
+        Relative radius of curvature R [m].
+    composite_modulus : float
+        E* [Pa].
+
+    Returns
+    -------
+    TiltedHertz
+        The Hertz contact of W centred at e = (M2/W, M1/W), with phi = (M1, M2)/(W R)
+        and omega3 = a^2/R - R |phi|^2 / 2 (see :class:`TiltedHertz`). The rotation is a
+        gap term only (small angles), so the result holds while the moved contact stays
+        on the body's surface that the gap hi describes.
+    """
+    hz = hertz_sphere(normal_force, radius, composite_modulus)
+    W = float(normal_force)
+    e = (float(moment2) / W, float(moment1) / W)
+    phi = (e[1] / float(radius), e[0] / float(radius))
+    omega3 = hz.approach - float(radius) * (phi[0] ** 2 + phi[1] ** 2) / 2.0
+    return TiltedHertz(hz, e, phi, float(omega3))
 
 
 @dataclass(frozen=True)

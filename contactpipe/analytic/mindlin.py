@@ -2,7 +2,8 @@
 
 Hertzian normal pressure, no normal-tangential coupling (Dundurs beta = 0), load along x1.
 References: Johnson (1985) §7.2-7.3; Mindlin & Deresiewicz (1953); Jaeger (1998) for
-histories by superposition (Masing). SI units.
+histories by superposition (Masing). Force control, and displacement control (a fretting
+rig's), where the contact may slide as a whole (gross slip). SI units.
 """
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ from ._common import sqrt_plus
 
 __all__ = ["CattaneoMindlin", "cattaneo_mindlin", "masing_memory",
            "mindlin_deresiewicz_traction", "stick_radius", "tangential_displacement",
-           "energy_per_cycle"]
+           "energy_per_cycle", "gross_slip_displacement", "mindlin_force",
+           "displacement_loop_force", "displacement_energy_per_cycle"]
 
 
 # --------------------------------------------------------------------------- Cattaneo
@@ -351,3 +353,145 @@ def energy_per_cycle(amplitude, friction_coefficient, normal_force, contact_radi
     return float(9.0 * mu_w ** 2 * compliance_sum / (10.0 * contact_radius) * bracket)
 
 
+
+
+# --------------------------------------------------------------------------- displacement control
+def gross_slip_displacement(friction_coefficient, normal_force, contact_radius,
+                            compliance_sum) -> float:
+    """Displacement at which the contact starts to slide as a whole [m].
+
+    Mindlin's virgin curve reaches T = mu W at ``delta_gs = 3 mu W C / (16 a)``, C the
+    compliance sum ``(2 - nu1)/G1 + (2 - nu2)/G2`` ([J85]_ §7.2); for identical bodies
+    ``delta_gs = 3 mu W (2 - nu) / (8 G a)``.
+
+    Parameters
+    ----------
+    friction_coefficient : float
+        mu [1].
+    normal_force : float
+        W [N].
+    contact_radius : float
+        Hertz contact radius a [m].
+    compliance_sum : float
+        C [1/Pa] (:func:`tangential_compliance_sum`).
+    """
+    return 3.0 * friction_coefficient * normal_force * compliance_sum / (16.0 * contact_radius)
+
+
+def _virgin_force(delta, mu_w, d_gs):
+    """Signed T(delta) on the virgin curve: mu W [1 - (1 - |delta|/delta_gs)^(3/2)],
+    mu W beyond delta_gs (gross slip)."""
+    x = np.clip(1.0 - np.abs(delta) / d_gs, 0.0, 1.0)
+    return np.sign(delta) * mu_w * (1.0 - x ** 1.5)
+
+
+def mindlin_force(displacement, friction_coefficient, normal_force, contact_radius,
+                  compliance_sum):
+    """Tangential force on the first branch under displacement control [N].
+
+    Inverting Mindlin's virgin curve ([J85]_ §7.2, :func:`tangential_displacement`):
+    ``T = mu W [1 - (1 - delta/delta_gs)^(3/2)]`` for ``|delta| <= delta_gs``
+    (:func:`gross_slip_displacement`), and ``T = mu W`` (gross slip) beyond; odd in delta.
+
+    Parameters
+    ----------
+    displacement : float or array_like
+        delta = omega1 [m], from rest.
+    friction_coefficient, normal_force, contact_radius, compliance_sum
+        mu [1], W [N], a [m], C [1/Pa].
+
+    Returns
+    -------
+    float or ndarray
+        T [N], with the sign of delta.
+    """
+    mu_w = friction_coefficient * normal_force
+    d_gs = gross_slip_displacement(friction_coefficient, normal_force, contact_radius,
+                                   compliance_sum)
+    out = _virgin_force(np.asarray(displacement, float), mu_w, d_gs)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def displacement_loop_force(history, friction_coefficient, normal_force, contact_radius,
+                            compliance_sum):
+    """Tangential force [N] at every sample of a displacement history (Mindlin-Deresiewicz
+    under displacement control, with gross slip).
+
+    Masing's rules in displacement: from the last remembered reversal (delta_r, T_r) the
+    branch is ``T = T_r + s 2 T_v(|delta - delta_r| / 2)`` (s the direction, T_v the
+    virgin curve :func:`mindlin_force`), memory is wiped as in :func:`masing_memory`, and
+    once |T| reaches mu W the contact slides as a whole: T stays at s mu W, every memory
+    is erased and the state is that of the virgin curve at delta_gs (q = mu p everywhere)
+    about the centre ``delta - s delta_gs``. A cycle between +-delta* > delta_gs thus has
+    Mindlin-Deresiewicz branches of width 2 delta_gs and plateaus |T| = mu W.
+
+    Parameters
+    ----------
+    history : array_like
+        delta [m] samples, from rest at 0, linear between samples.
+    friction_coefficient, normal_force, contact_radius, compliance_sum
+        mu [1], W [N], a [m], C [1/Pa].
+
+    Returns
+    -------
+    ndarray
+        T [N] at each sample.
+    """
+    mu_w = friction_coefficient * normal_force
+    d_gs = gross_slip_displacement(friction_coefficient, normal_force, contact_radius,
+                                   compliance_sum)
+    centre, stack, T, prev, direction = 0.0, [], 0.0, 0.0, 0
+    out = []
+    for d in np.atleast_1d(np.asarray(history, float)).ravel():
+        d = float(d)
+        if d != prev:
+            s = 1 if d > prev else -1
+            if direction and s != direction:
+                stack.append((prev, T))
+            direction = s
+            while True:
+                if len(stack) >= 2 and s * (d - stack[-2][0]) >= 0.0:
+                    del stack[-2:]
+                elif len(stack) == 1 and s * (d - (2.0 * centre - stack[0][0])) >= 0.0:
+                    stack.pop()
+                else:
+                    break
+            if stack:
+                d_r, T_r = stack[-1]
+                T = T_r + s * 2.0 * float(_virgin_force(abs(d - d_r) / 2.0, mu_w, d_gs))
+            else:
+                T = float(_virgin_force(d - centre, mu_w, d_gs))
+            if abs(T) >= mu_w:                      # the contact slides as a whole
+                T, stack, centre = s * mu_w, [], d - s * d_gs
+            prev = d
+        out.append(T)
+    return np.array(out)
+
+
+def displacement_energy_per_cycle(amplitude, friction_coefficient, normal_force,
+                                  contact_radius, compliance_sum) -> float:
+    """Energy dissipated per full cycle delta = +-delta* under displacement control [J].
+
+    Partial slip (delta* <= delta_gs): the Mindlin-Deresiewicz energy
+    :func:`energy_per_cycle` of the force amplitude T* = T(delta*) on the virgin curve.
+    Gross slip (delta* > delta_gs): ``E = E_MD(mu W) + 4 mu W (delta* - delta_gs)``, the
+    loop of two Mindlin-Deresiewicz branches of width 2 delta_gs closed by the sliding
+    plateaus |T| = mu W (``E_MD(mu W) = 3 mu^2 W^2 C / (20 a) = (4/5) mu W delta_gs``).
+
+    Parameters
+    ----------
+    amplitude : float
+        delta* [m], >= 0.
+    friction_coefficient, normal_force, contact_radius, compliance_sum
+        mu [1], W [N], a [m], C [1/Pa].
+    """
+    amplitude = abs(float(amplitude))
+    mu_w = friction_coefficient * normal_force
+    d_gs = gross_slip_displacement(friction_coefficient, normal_force, contact_radius,
+                                   compliance_sum)
+    if amplitude <= d_gs:
+        t_star = min(float(_virgin_force(amplitude, mu_w, d_gs)), mu_w)
+        return energy_per_cycle(t_star, friction_coefficient, normal_force, contact_radius,
+                                compliance_sum)
+    return energy_per_cycle(mu_w, friction_coefficient, normal_force, contact_radius,
+                            compliance_sum) + 4.0 * mu_w * (amplitude - d_gs)

@@ -7,8 +7,8 @@ how many instants break a rule and the first of them:
 * a float that is NaN or inf;
 * a negative pressure ``p`` or gap ``h`` (the contract: p >= 0, h >= 0);
 * a ``status`` outside its ``flag_values``;
-* Coulomb's law broken: |q| - mu p > :data:`COULOMB_RTOL` x mu x max(p) of that instant
-  (mu from the ``scene`` attribute's ``friction.mu``);
+* Coulomb's law broken: |q| - mu p > :data:`COULOMB_RTOL` x max(mu p) of that instant
+  (mu from the ``scene`` attribute's ``friction.mu``, or the archive's map ``mu``);
 * a value that cannot be read back: a netCDF checksum (fletcher32) mismatch or a corrupt
   compressed chunk, located to the instant.
 
@@ -129,12 +129,13 @@ def _check_coulomb(block, mu, offset, tally):
     with np.errstate(invalid="ignore", over="ignore"):   # NaN/inf are reported apart
         q = np.hypot(q1, q2) if q2 is not None else np.abs(q1)
         bound = mu * p.astype(float)
-        scale = mu * p.reshape(p.shape[0], -1).max(axis=1).astype(float)
+        scale = bound.reshape(p.shape[0], -1).max(axis=1)
         excess = (q - bound).reshape(p.shape[0], -1).max(axis=1)
         over = excess > COULOMB_RTOL * scale
-    tally.add(("q1, q2", f"|q| > mu p (mu = {mu:g}, allowed excess {COULOMB_RTOL:g} mu "
-                         "max p)"), offset, over,
-              lambda i: f"excess {excess[i] / max(scale[i], 1e-300):.3g} mu max p")
+    what = f"mu = {mu:g}" if np.ndim(mu) == 0 else "mu the archive's map"
+    tally.add(("q1, q2", f"|q| > mu p ({what}, allowed excess {COULOMB_RTOL:g} max mu "
+                         "p)"), offset, over,
+              lambda i: f"excess {excess[i] / max(scale[i], 1e-300):.3g} max mu p")
 
 
 def content_problems(ds: xr.Dataset, budget_bytes: int = BLOCK_BYTES) -> list[str]:
@@ -170,6 +171,8 @@ def content_problems(ds: xr.Dataset, budget_bytes: int = BLOCK_BYTES) -> list[st
                  for n in timed), default=1)
     step = max(1, int(budget_bytes) // (4 * 8 * max(cells, 1)))
     mu = _friction(ds)
+    if "mu" in ds.data_vars and ds["mu"].dims == ("x1", "x2"):
+        mu = np.asarray(ds["mu"].values, dtype=float)        # a mapped friction coefficient
     broken = set()
     for start in range(0, len(times), step):
         sl = slice(start, min(start + step, len(times)))

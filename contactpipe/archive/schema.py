@@ -19,7 +19,7 @@ from .._version import __version__
 from ..exceptions import ArchiveError, one_line
 from ..files import TOMLDecodeError, loads_toml
 from ..nomenclature import (
-    CONVENTIONS, COORDINATES, FIELD, REQUIRED_ATTRS, TANGENTIAL, VARIABLES,
+    CONVENTIONS, COORDINATES, FIELD, MAPS, REQUIRED_ATTRS, TANGENTIAL, VARIABLES,
 )
 
 __all__ = ["PRECISIONS", "SERIES_CHUNK", "COMPLEVEL", "DIMS", "join_problems", "storable",
@@ -243,7 +243,14 @@ def _coordinate_problems(ds: xr.Dataset) -> list[str]:
 
 def _variable_schema_problems(ds: xr.Dataset) -> list[str]:
     problems = [f"unknown variable {name!r} (not in contactpipe.nomenclature.VARIABLES)"
-                for name in ds.data_vars if name not in VARIABLES]
+                for name in ds.data_vars if name not in VARIABLES and name not in MAPS]
+    for name in set(ds.data_vars) & set(MAPS):
+        v, entry = ds[name], MAPS[name]
+        if tuple(v.dims) != entry["dims"]:
+            problems.append(f"{name}: dims {tuple(v.dims)}, expected {entry['dims']}")
+        if v.attrs.get("units") != entry["units"]:
+            problems.append(f"{name}: units {v.attrs.get('units')!r}, expected "
+                            f"{entry['units']!r}")
     tangential = tangential_model(ds.attrs)
     for name, entry in VARIABLES.items():
         if name not in ds.data_vars:

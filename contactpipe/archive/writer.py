@@ -31,7 +31,7 @@ import xarray as xr
 
 from ..exceptions import ArchiveError, one_line
 from ..files import publish, temp_name
-from ..nomenclature import FIELD, VARIABLES, cf_attrs
+from ..nomenclature import FIELD, MAP, MAPS, VARIABLES, cf_attrs
 from .content import content_problems
 from .schema import (
     COMPLEVEL, SERIES_CHUNK, attr_problems, axis, global_attrs, join_problems,
@@ -60,7 +60,7 @@ def validate(ds: xr.Dataset) -> list[str]:
 class _StepWriter:
     """What both writers share: argument checks, per-step checks, context management."""
 
-    def __init__(self, x1, x2, variables, attrs, precision):
+    def __init__(self, x1, x2, variables, attrs, precision, maps=None):
         self.x1 = axis("x1", x1)
         self.x2 = axis("x2", x2)
         self.variables = tuple(variables)
@@ -68,6 +68,16 @@ class _StepWriter:
         self.attrs = global_attrs(attrs)
         problems = variable_problems(self.variables)
         problems += attr_problems(self.attrs, required=("scene", "models"))
+        self.maps = {}
+        for name, value in (maps or {}).items():
+            if name not in MAPS:
+                problems.append(f"{name}: not a map of contactpipe.nomenclature.MAPS")
+                continue
+            arr = self._check_value(name, self.precision, value)
+            if isinstance(arr, str):
+                problems.append(arr)
+            else:
+                self.maps[name] = arr
         if problems:
             raise ArchiveError(f"{self._label()}: " + join_problems(problems))
         self._dtypes = {n: storage_dtype(n, self.precision) for n in self.variables}
@@ -82,7 +92,8 @@ class _StepWriter:
     def _check_value(self, name, dtype, value):
         """One variable of one instant, cast to its storage type; or a problem (str)."""
         arr = np.asarray(value)
-        want = (self.x1.size, self.x2.size) if VARIABLES[name]["dims"] == FIELD else ()
+        entry = VARIABLES.get(name) or MAPS[name]
+        want = (self.x1.size, self.x2.size) if entry["dims"] in (FIELD, MAP) else ()
         if want == () and arr.size == 1:
             arr = arr.reshape(())
         if arr.shape != want:
@@ -98,7 +109,7 @@ class _StepWriter:
                     or arr.min() < info.min or arr.max() > info.max:
                 return f"{name}: values must be integers within {dtype}"
             arr = arr.astype(dtype)
-            flags = VARIABLES[name].get("flag_values")
+            flags = entry.get("flag_values")
             if flags is not None and not np.isin(arr, flags).all():
                 return (f"{name}: values {np.setdiff1d(arr, flags)} outside flag_values "
                         f"{list(flags)}")
@@ -239,6 +250,9 @@ class ArchiveWriter(_StepWriter):
     resume_steps : int, optional
         Continue the existing part file after this many instants (checked first: its grid,
         variables and those instants; :class:`ArchiveError` when it is damaged).
+    maps : dict, optional
+        Variables over (x1, x2) written once (:data:`contactpipe.nomenclature.MAPS`, e.g. a
+        mapped friction coefficient ``mu``), checked like a field.
 
     Notes
     -----
@@ -251,9 +265,10 @@ class ArchiveWriter(_StepWriter):
     """
 
     def __init__(self, path, x1, x2, variables: list[str], attrs: dict,
-                 precision="float64", compress=True, resumable=False, resume_steps=None):
+                 precision="float64", compress=True, resumable=False, resume_steps=None,
+                 maps=None):
         self.path = pathlib.Path(path)
-        super().__init__(x1, x2, variables, attrs, precision)
+        super().__init__(x1, x2, variables, attrs, precision, maps)
         self.compress = bool(compress)
         self.resumable = bool(resumable)
         self._tmp = resumable_part(self.path) if resumable else temp_name(self.path)
@@ -290,8 +305,8 @@ class ArchiveWriter(_StepWriter):
         elif steps < 1:
             problems = [f"the checkpoint records {steps} instants written"]
         else:
-            problems = _written_problems(self._tmp, self.x1, self.x2, self.variables, steps,
-                                         whole=False)
+            problems = _written_problems(self._tmp, self.x1, self.x2,
+                                         self.variables + tuple(self.maps), steps, whole=False)
         if problems:
             raise ArchiveError(f"{self.path}: cannot resume from {self._tmp.name}: "
                                + join_problems(problems))
@@ -348,6 +363,11 @@ class ArchiveWriter(_StepWriter):
             v.set_var_chunk_cache(size=int(np.prod(v.chunking())) * dtype.itemsize, nelems=7,
                                   preemption=1.0)
             v.setncatts(cf_attrs(name))
+        for name, arr in self.maps.items():
+            v = nc.createVariable(name, arr.dtype, MAP, fill_value=False, fletcher32=True,
+                                  **zip_)
+            v.setncatts(cf_attrs(name))
+            v[:] = arr
         nc.setncatts(self.attrs)
 
     def append(self, t: float, values: dict) -> None:
@@ -372,8 +392,9 @@ class ArchiveWriter(_StepWriter):
             final["complete"] = "true"
             self._nc.setncatts(final)
             self._nc.close()
-            problems = _written_problems(self._tmp, self.x1, self.x2, self.variables,
-                                         self.steps, whole=True)
+            problems = _written_problems(self._tmp, self.x1, self.x2,
+                                         self.variables + tuple(self.maps), self.steps,
+                                         whole=True)
             if problems:
                 raise ArchiveError(f"{self.path}: not published, the archive written breaks "
                                    "the archive's rules: " + join_problems(problems))
@@ -408,11 +429,11 @@ class MemoryWriter(_StepWriter):
     """
 
     def __init__(self, path, x1, x2, variables: list[str], attrs: dict, precision="float64",
-                 compress=True):
+                 compress=True, maps=None):
         if path is not None:
             raise ArchiveError(f"MemoryWriter: path={str(path)!r}, expected None (it keeps "
                                "the steps in memory; ArchiveWriter writes a file)")
-        super().__init__(x1, x2, variables, attrs, precision)
+        super().__init__(x1, x2, variables, attrs, precision, maps)
         self._times: list[float] = []
         self._data: dict[str, list] = {n: [] for n in self.variables}
 
@@ -430,8 +451,8 @@ class MemoryWriter(_StepWriter):
             raise ArchiveError(f"{self._label()}: writer already closed or aborted")
         final = self._final_attrs(attrs)
         data, self._data = self._data, {}
-        ds = to_dataset(self.x1, self.x2, self._times,
-                        {n: np.stack(data.pop(n)) for n in list(data)}, final)
+        fields = {n: np.stack(data.pop(n)) for n in list(data)}
+        ds = to_dataset(self.x1, self.x2, self._times, {**fields, **self.maps}, final)
         self.abort()
         problems = schema_problems(ds) + content_problems(ds)
         if problems:
@@ -455,8 +476,8 @@ def to_dataset(x1, x2, times, fields: dict, attrs: dict) -> xr.Dataset:
     times : array_like
         The instants [s], strictly ascending.
     fields : dict of str -> array_like
-        Variable name -> values, shaped (time, x1, x2) or (time,) as the nomenclature
-        says. Floats stay float32 when given as float32, else become float64; ``status``
+        Variable name -> values, shaped (time, x1, x2), (time,) or (x1, x2) as the
+        nomenclature says. Floats stay float32 when given as float32, else become float64; ``status``
         becomes int8 and counts int32.
     attrs : dict
         Global attributes (``Conventions`` and ``contactpipe_version`` are filled in).
@@ -468,12 +489,12 @@ def to_dataset(x1, x2, times, fields: dict, attrs: dict) -> xr.Dataset:
     """
     coords = {"time": axis("time", times), "x1": axis("x1", x1), "x2": axis("x2", x2)}
     sizes = {d: v.size for d, v in coords.items()}
-    problems = variable_problems(fields)
+    problems = variable_problems([n for n in fields if n not in MAPS])
     data_vars = {}
     for name, values in fields.items():
-        if name not in VARIABLES:
+        if name not in VARIABLES and name not in MAPS:
             continue
-        entry = VARIABLES[name]
+        entry = VARIABLES.get(name) or MAPS[name]
         arr = np.asarray(values)
         want = tuple(sizes[d] for d in entry["dims"])
         if arr.shape != want:
@@ -497,12 +518,14 @@ def _encoding(ds: xr.Dataset, prec, compress: bool) -> dict:
     encoding = {}
     for name, v in ds.variables.items():
         enc = {"_FillValue": None, "fletcher32": True}
-        if name in VARIABLES:
-            entry = VARIABLES[name]
+        if name in VARIABLES or name in MAPS:
+            entry = VARIABLES.get(name) or MAPS[name]
             enc["dtype"] = (prec or v.dtype) if entry["dtype"] == "float" \
                 else np.dtype(entry["dtype"])
             if entry["dims"] == FIELD:
                 enc["chunksizes"] = (1, ds.sizes["x1"], ds.sizes["x2"])
+                enc.update(zip_)
+            elif entry["dims"] == MAP:
                 enc.update(zip_)
             else:
                 enc.update(chunksizes=(SERIES_CHUNK,), zlib=False)

@@ -25,6 +25,17 @@ and restoration of the force by scaling (one-sided problem, as in Polonsky-Keer)
 shift of the free cells (two-sided problem, Vollebregt's BCCG idea). Every iteration costs
 one FFT pair (``A t``); a second one is spent only when the projection changed the
 iterate, which near convergence it no longer does.
+
+General constraint rows (:class:`Constraints`): the force row Σx = S generalises to up to
+three rows ``C x = f`` (paper eqs. 1-2: the force and the moments of the pressure, or the
+shear's forces and torque), whose multipliers are the rigid motions (ω3, φ1, φ2) or
+(Δω1, Δω2, Δφ3) (DESIGN §8). Each iteration fits the multipliers to the working set by
+least squares (an m x m system, m <= 3), so the search direction keeps C x fixed, and
+the constraints are restored after a projection by the Euclidean projection of the free
+cells onto {bounds, C x = f}: a damped dual Newton iteration on the m multipliers
+(:func:`project_rows`). With no row at all
+(displacement control: the rigid motion is known and sits in ``b``) the problem is a plain
+bound-constrained QP and no multiplier is fitted.
 """
 from __future__ import annotations
 
@@ -32,7 +43,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BoxResult", "box_cg", "fista", "project_box_sum"]
+#: Levenberg-Marquardt damping of the dual Newton step of :func:`project_rows`, relative
+#: to the Lipschitz constant of the dual's gradient: from the first value (a plain Newton
+#: step, kept where it ascends) up to the last (a gradient step, which always ascends) [1].
+DAMPING = (1e-12, 1e4)
+
+__all__ = ["BoxResult", "Constraints", "box_cg", "fista", "project_box_sum",
+           "project_rows", "box_jacobian", "box_project", "disk_jacobian", "disk_project"]
 
 
 @dataclass
@@ -40,12 +57,240 @@ class BoxResult:
     """Outcome of :func:`box_cg`."""
 
     x: np.ndarray          # solution
-    multiplier: float      # λ of the force constraint
+    multiplier: float      # λ of the force constraint (an (m,) array with Constraints)
     Ax: np.ndarray         # A x (kept to save a convolution for the caller)
     iterations: int
     residual: float        # last relative change Σ|Δx| / scale
     converged: bool
 
+
+class Constraints:
+    """Equality rows ``C x = f`` of an inner problem (at most three), on cell arrays.
+
+    Parameters
+    ----------
+    rows : array_like (m, *shape)
+        One array per row, the shape of the unknown x (e.g. (N1, N2), or (2, N1, N2) for
+        the two shear components). Normalise them to entries of order 1 (a moment arm
+        divided by the grid's half length) so that the force error of every row is
+        measured in the same unit.
+    target : array_like (m,)
+        The row sums f, in the unit of x (a force divided by the cell area).
+    sums : bool
+        The rows are plain sums of disjoint components (the force rows): the multipliers
+        are then fitted as plain means, the arithmetic of the one-row solver.
+    """
+
+    def __init__(self, rows, target, sums: bool = False):
+        self.rows = np.asarray(rows, dtype=float)
+        self.target = np.atleast_1d(np.asarray(target, dtype=float))
+        self.m = int(self.rows.shape[0])
+        self.sums = bool(sums)
+        if self.target.shape != (self.m,):
+            raise ValueError(f"{self.m} rows need {self.m} targets, got {self.target.shape}")
+
+    @classmethod
+    def none(cls, shape) -> "Constraints":
+        """No row: displacement control (a plain bound-constrained problem)."""
+        return cls(np.zeros((0,) + tuple(shape)), np.zeros(0))
+
+    def field(self, lam) -> np.ndarray | float:
+        """Cᵀλ, the rigid motion of the multipliers (shape of x; 0.0 without rows)."""
+        if self.m == 0:
+            return 0.0
+        return np.tensordot(np.asarray(lam, dtype=float), self.rows, axes=1)
+
+    def sums_of(self, x) -> np.ndarray:
+        """C x (m,)."""
+        if self.sums:
+            return np.array([float(x[r != 0].sum()) for r in self.rows])
+        return np.array([float(np.sum(r * x)) for r in self.rows])
+
+    def residual(self, x) -> np.ndarray:
+        """C x − f (m,)."""
+        return self.sums_of(x) - self.target
+
+    def _on(self, cells):
+        """The rows on ``cells`` (a mask over the last two axes), as an (m, k) matrix."""
+        return self.rows[..., cells].reshape(self.m, -1)
+
+    def fit(self, g, cells) -> np.ndarray:
+        """The multipliers λ (m,) that make g − Cᵀλ orthogonal to the rows on ``cells``
+        (a mask over the grid: least squares over those cells; a plain mean per row for
+        force rows)."""
+        if self.m == 0 or not np.any(cells):
+            return np.zeros(self.m)
+        Cw = self._on(cells)
+        gw = g[..., cells].reshape(-1)
+        if self.sums:
+            return np.array([gw[c != 0].mean() if np.any(c != 0) else 0.0 for c in Cw])
+        return np.linalg.lstsq(Cw @ Cw.T, Cw @ gw, rcond=None)[0]
+
+    def keep(self, z, cells) -> np.ndarray:
+        """z changed on ``cells`` (a mask over the grid) only, so that C z = 0: a direction
+        that keeps C x."""
+        if self.m == 0 or not np.any(cells):
+            return z
+        Cw = self._on(cells)
+        if self.sums:
+            mu = self.sums_of(z) / np.count_nonzero(cells)
+        else:
+            mu = np.linalg.lstsq(Cw @ Cw.T, self.sums_of(z), rcond=None)[0]
+        out = z.copy()
+        lead = z.shape[:-2]
+        out[..., cells] -= (mu @ Cw).reshape(lead + (-1,))
+        return out
+
+
+# --------------------------------------------------------------------------- projections
+def box_project(z, lo, hi):
+    """Clip z to [lo, hi] (the cellwise projection of the box problems); (x, inside)."""
+    x = np.clip(z, lo, hi)
+    return x, (z > lo) & (z < hi)
+
+
+def box_jacobian(z, lo, hi, inside):
+    """Cellwise derivative of the clip: 1 inside, 0 at a bound (shape of z)."""
+    return inside.astype(float)
+
+
+def disk_project(z, rho):
+    """Radial projection of each cell's vector z (2, N1, N2) onto the disk |z| <= rho.
+    Returns (x, over) with ``over`` the cells that were outside."""
+    mag = np.hypot(z[0], z[1])
+    over = mag > rho
+    if over.any():
+        f = np.where(over, rho / np.where(mag > 0, mag, 1.0), 1.0)
+        z = z * f
+    return z, over
+
+
+def disk_jacobian(z, rho, over):
+    """Cellwise Jacobian (2, 2, N1, N2) of :func:`disk_project`: I inside the disk,
+    (rho/|z|)(I − ẑẑᵀ) outside."""
+    mag = np.hypot(z[0], z[1])
+    safe = np.where(mag > 0, mag, 1.0)
+    zh = z / safe
+    f = np.where(over, rho / safe, 1.0)
+    J = np.zeros((2, 2) + z.shape[1:])
+    for i in range(2):
+        for j in range(2):
+            J[i, j] = f * ((1.0 if i == j else 0.0) - np.where(over, zh[i] * zh[j], 0.0))
+    return J
+
+
+def project_rows(y, C: Constraints, cells, kind="box", lo=None, hi=None, rho=None,
+                 max_iter=100):
+    """Euclidean projection of y on ``cells`` onto {the cellwise set, C x = f}, the other
+    cells held: x = P(y − Cᵀν) on the cells, with the multipliers ν (m,) from a dual
+    Newton iteration.
+
+    The dual ``d(ν) = ½|x(ν) − y|² + νᵀ(C x(ν) − f')`` (f' = f less what the held cells
+    carry) is concave with gradient C x(ν) − f'; each Newton step on it is damped by an
+    Levenberg-Marquardt damping, raised until the step ascends (a damped step tends to a
+    gradient step of length 1/L, which always does), so the iteration cannot run away
+    where the generalised Jacobian is near-singular (every cell on its bound or rim); a
+    step is also taken where it lowers the residual while the dual's change is below
+    rounding. Near the solution the damping falls away and the convergence is quadratic.
+
+    Parameters
+    ----------
+    y : ndarray
+        (N1, N2) for ``kind = "box"``, (2, N1, N2) for ``"disk"``.
+    C : Constraints
+    cells : ndarray of bool (N1, N2)
+        The cells that move.
+    kind : {"box", "disk"}
+        lo <= x <= hi per cell, or |x| <= rho per cell.
+
+    Returns
+    -------
+    ndarray
+        The projection (y where ``cells`` is False). When no point of the set meets the
+        rows (the target lies beyond a supporting plane of what the cells can carry,
+        checked at every step along the residual) the iteration stops with the best it
+        reached.
+    """
+    x = y.copy()
+    if C.m == 0 or not np.any(cells):
+        return _project_cells(x, cells, kind, lo, hi, rho)
+    ys = y[..., cells]
+    Cs = C._on(cells)                                        # (m, k)
+    held = ~cells
+    f = C.target - C.sums_of(np.where(held, y, 0.0))
+    if kind == "box":
+        ls, hs = lo[cells], hi[cells]
+
+        def proj(z):
+            return box_project(z, ls, hs)
+
+        def support(u):
+            v = u @ Cs                                        # (k,)
+            return float(np.sum(np.maximum(ls * v, np.where(np.isfinite(hs), hs * v,
+                                                            np.where(v > 0, np.inf, 0.0)))))
+
+        def jac(z, inside):
+            d = box_jacobian(z, ls, hs, inside)
+            return (Cs * d) @ Cs.T
+    else:
+        rs = rho[cells]
+
+        def proj(z):
+            return disk_project(z, rs)
+
+        def support(u):
+            v = (u @ Cs).reshape(2, -1)                       # (2, k)
+            return float(np.sum(rs * np.hypot(v[0], v[1])))
+
+        def jac(z, over):
+            J = disk_jacobian(z, rs, over)
+            A = Cs.reshape(C.m, 2, -1)
+            return np.einsum("aik,ijk,bjk->ab", A, J, A)
+
+    def dual(nu):
+        z = ys - (nu @ Cs).reshape(ys.shape)
+        xs, flag = proj(z)
+        F = Cs @ xs.reshape(-1) - f
+        return z, xs, flag, F, 0.5 * float(np.sum((xs - ys) ** 2)) + float(nu @ F)
+
+    scale = float(np.abs(f).max() + np.abs(ys).sum() + np.abs(Cs).max()) + 1e-300
+    lipschitz = max(float(np.linalg.eigvalsh(Cs @ Cs.T).max()), 1e-300)
+    nu = np.zeros(C.m)
+    z, xs, flag, F, d = dual(nu)
+    damping = DAMPING[0]
+    for _ in range(max_iter):
+        size = float(np.abs(F).max())
+        if size <= 1e-14 * scale:
+            break
+        u = -F / np.linalg.norm(F)
+        if float(u @ f) > support(u) + 1e-12 * scale:
+            break                     # beyond what the cells can carry: no projection
+        J = jac(z, flag)
+        while damping <= DAMPING[1]:
+            step = np.linalg.solve(J + damping * lipschitz * np.eye(C.m), F)
+            trial = dual(nu + step)
+            # ascent of the dual, or (where its change is below rounding) of the residual
+            flat = abs(trial[4] - d) <= 1e-13 * (abs(d) + abs(trial[4]))
+            if trial[4] >= d + 1e-4 * float(F @ step) or \
+                    (flat and float(np.abs(trial[3]).max()) <= (1.0 - 1e-4) * size):
+                damping = max(damping / 10.0, DAMPING[0])
+                break
+            damping *= 10.0
+        else:
+            break
+        nu = nu + step
+        z, xs, flag, F, d = trial
+    x[..., cells] = xs
+    return x
+
+
+def _project_cells(x, cells, kind, lo, hi, rho):
+    """The cellwise projection of ``cells`` (no row to keep)."""
+    if kind == "box":
+        x[cells] = np.clip(x[cells], lo[cells], hi[cells])
+    else:
+        x[:, cells] = disk_project(x[:, cells], rho[cells])[0]
+    return x
 
 def _dot(a, b) -> float:
     """Inner product without BLAS: OpenBLAS threads a long ddot, which on a busy 2-core
@@ -112,6 +357,71 @@ def _restore_by_shift(x, lo, hi, target, free):
     return out if "out" in locals() else x
 
 
+def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0):
+    """The first iterate (the constraints restored) and its A x."""
+    x0 = np.asarray(x0, dtype=float)
+    x = np.clip(x0, lo, hi)
+    clipped = not np.array_equal(x, x0)
+    if con is not None:
+        before = x.copy()
+        if con.m:
+            if restore == "scale" and not np.any(x > lo):
+                x = np.where(movable, 1.0, 0.0)     # a uniform start, as Polonsky-Keer's
+            x = _restore_rows(x, lo, hi, con, (x > lo) & (x < hi), movable)
+        changed = clipped or not np.array_equal(before, x)
+        return x, (apply(x) if (Ax0 is None or changed) else Ax0)
+    if restore == "scale":
+        s = x.sum()
+        if s <= 0:
+            x = np.where(lo < hi, 1.0, 0.0)
+            s = x.sum()
+            clipped = True
+        factor = target / s
+        x = x * factor
+        # a pure rescaling is linear: A x = factor * A x0
+        return x, (apply(x) if (Ax0 is None or clipped) else Ax0 * factor)
+    before = x.copy()
+    x = _restore_by_shift(x, lo, hi, target, (x > lo) & (x < hi))
+    changed = clipped or not np.array_equal(before, x)
+    return x, (apply(x) if (Ax0 is None or changed) else Ax0)
+
+
+def _restore_rows(x, lo, hi, con, free, movable):
+    """The constraint rows restored by projecting the free cells (then, when they cannot
+    carry them, every movable cell) onto {bounds, C x = f}."""
+    out = x
+    for cells in (free, movable):
+        if not cells.any():
+            continue
+        out = project_rows(x, con, cells, "box", lo=lo, hi=hi)
+        tol = 1e-12 * (np.abs(con.target).max(initial=0.0) + np.abs(out).sum())
+        if np.abs(con.residual(out)).max(initial=0.0) <= tol:
+            return out
+    return out
+
+
+def _fit(con, g, free, movable, cells=None):
+    """Multipliers of the working cells: the legacy mean (one force row, or the median
+    when nothing is free), or a least-squares fit to the rows."""
+    if con is None:
+        if cells is not None:
+            return g[cells].mean()
+        if free.any():
+            return g[free].mean()
+        return float(np.median(g[movable])) if movable.any() else 0.0
+    use = cells if cells is not None else (free if free.any() else movable)
+    return con.fit(g, use)
+
+
+def _change(x_new, x, scale) -> float:
+    """Σ|x_new − x| / scale, or relative to Σ|x_new| when ``scale`` is None (0 when
+    nothing moved)."""
+    d = float(np.abs(x_new - x).sum())
+    if scale is None:
+        return 0.0 if d == 0.0 else d / max(float(np.abs(x_new).sum()), 1e-300)
+    return d / scale
+
+
 def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
            scale=None, Ax0=None) -> BoxResult:
     """Solve the bound- and force-constrained quadratic problem described in the module doc.
@@ -124,64 +434,59 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         Known linear term (same shape as x) [m].
     lo, hi : ndarray
         Per-cell bounds [Pa]; ``lo == hi`` fixes a cell. ``hi`` may be ``inf``.
-    target : float
-        Required Σx [Pa] (force / cell area).
+    target : float or Constraints
+        Required Σx [Pa] (force / cell area); or general rows C x = f (up to three, none
+        for displacement control), whose multipliers are returned as an (m,) array.
     x0 : ndarray
         Warm start [Pa]; projected onto the constraints first.
     tol : float
         Stop when Σ|x_new − x_old| / scale < tol.
     restore : {"scale", "shift"}
         How the force is restored after a projection: Polonsky-Keer scaling (only for
-        lo = 0, hi = ∞) or a clipped shift of the free cells (two-sided bounds).
+        lo = 0, hi = ∞) or a clipped shift of the free cells (two-sided bounds). With
+        :class:`Constraints` the rows are always restored by projecting the free cells
+        (:func:`project_rows`); "scale" then only asks for a uniform start when nothing
+        is loaded.
     scale : float, optional
-        Normaliser of the convergence measure [Pa]; default |target| or Σ|x|.
+        Normaliser of the convergence measure [Pa]; default |target| (with
+        :class:`Constraints`: Σ|x| of the iterate, so that the change is relative, and a
+        contact that opens entirely, x = 0, converges).
     Ax0 : ndarray, optional
         ``A x0`` if already known (saves one FFT pair).
+
+    Notes
+    -----
+    ``converged`` is False whenever the residual or the iterate is not finite.
     """
-    x0 = np.asarray(x0, dtype=float)
-    x = np.clip(x0, lo, hi)
-    clipped = not np.array_equal(x, x0)
-    if restore == "scale":
-        s = x.sum()
-        if s <= 0:
-            x = np.where(lo < hi, 1.0, 0.0)
-            s = x.sum()
-            clipped = True
-        factor = target / s
-        x = x * factor
-        # a pure rescaling is linear: A x = factor * A x0
-        Ax = apply(x) if (Ax0 is None or clipped) else Ax0 * factor
-    else:
-        before = x.copy()
-        x = _restore_by_shift(x, lo, hi, target, (x > lo) & (x < hi))
-        changed = clipped or not np.array_equal(before, x)
-        Ax = apply(x) if (Ax0 is None or changed) else Ax0
-    if scale is None:
-        scale = max(abs(target), 1e-300)
+    con = target if isinstance(target, Constraints) else None
     movable = lo < hi
+    x, Ax = _start(x0, lo, hi, target, restore, con, movable, apply, Ax0)
+    relative = scale is None and con is not None
+    if scale is None and con is None:
+        scale = max(abs(target), 1e-300)
     t = np.zeros_like(x)
     G_old = 1.0
     working_old = None
     err = np.inf
-    lam = 0.0
+    lam = 0.0 if con is None else np.zeros(con.m)
     it = 0
     for it in range(1, max_iter + 1):
         g = Ax + b
         free = (x > lo) & (x < hi)
-        if free.any():
-            lam = g[free].mean()
-        elif movable.any():
-            lam = float(np.median(g[movable]))
-        gr = g - lam
+        lam = _fit(con, g, free, movable)
+        gr = g - (lam if con is None else con.field(lam))
         released = movable & (((x <= lo) & (gr < 0)) | ((x >= hi) & (gr > 0)))
         working = free | released
         if released.any():                      # λ on the whole working set: Σ_W gr = 0
-            lam = g[working].mean()
-            gr = g - lam
+            lam = _fit(con, g, free, movable, cells=working)
+            gr = g - (lam if con is None else con.field(lam))
         if not working.any():
             err = 0.0
             break
         G = _dot(gr[working], gr[working])
+        if not np.isfinite(G):
+            err = np.inf
+            break
         reset = released.any() or working_old is None or not np.array_equal(working, working_old)
         beta = 0.0 if reset else G / G_old
         t = np.where(working, gr + beta * t, 0.0)
@@ -197,29 +502,44 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         clipped = (x_new < lo) | (x_new > hi)
         if clipped.any():
             x_new = np.clip(x_new, lo, hi)
-            if restore == "scale":
+            if con is not None:
+                if con.m:
+                    x_new = _restore_rows(x_new, lo, hi, con, (x_new > lo) & (x_new < hi),
+                                          movable)
+            elif restore == "scale":
                 x_new *= target / x_new.sum()
             else:
                 x_new = _restore_by_shift(x_new, lo, hi, target, (x_new > lo) & (x_new < hi))
-            err = np.abs(x_new - x).sum() / scale
+            err = _change(x_new, x, None if relative else scale)
             x = x_new
             Ax = apply(x)
         else:
-            err = np.abs(x_new - x).sum() / scale
+            err = _change(x_new, x, None if relative else scale)
             x = x_new
             Ax = Ax - tau * r
+        if not err >= 0.0:                      # NaN: the iterate is lost
+            err = np.inf
+            break
         if err < tol:
             break
     g = Ax + b
     free = (x > lo) & (x < hi)
-    if free.any():
-        lam = g[free].mean()
+    if con is None:
+        if free.any():
+            lam = g[free].mean()
+        force_err = abs(float(x.sum()) - target) / scale
+    else:
+        if free.any():
+            lam = con.fit(g, free)
+        size = max(float(np.abs(x).sum()), float(np.abs(con.target).max(initial=0.0)),
+                   1e-300) if relative else scale
+        force_err = float(np.abs(con.residual(x)).max(initial=0.0)) / size
     # the force balance is part of convergence: a state with every cell at a bound may
     # satisfy the sign conditions and still carry the wrong force
-    force_err = abs(float(x.sum()) - target) / scale
     err = max(float(err), force_err)
-    return BoxResult(x=x, multiplier=float(lam), Ax=Ax, iterations=it, residual=err,
-                     converged=bool(err < tol))
+    ok = bool(err < tol) and bool(np.all(np.isfinite(x)))
+    return BoxResult(x=x, multiplier=lam if con is not None else float(lam), Ax=Ax,
+                     iterations=it, residual=err, converged=ok)
 
 
 def project_box_sum(y, lo, hi, target):

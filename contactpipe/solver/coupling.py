@@ -17,17 +17,31 @@ The caller gives the solver limits as one :class:`Tolerances` and what it knows 
 previous instant as one :class:`Previous`; :func:`solve_instant` returns an
 :class:`InstantResult` whose ``failed`` names the sub-problem that stopped
 (``"normal"``, ``"tangential"`` or ``"coupling"``) when ``converged`` is False.
+
+The six freedoms of body 1 relative to body 2 (paper eqs. 1-4) reach the solver as one
+:class:`Controls`: each is force-controlled (a target W, T1, T2, M1, M2, M3) or
+displacement-controlled (a known ω3, ω1, ω2, φ1, φ2, φ3). The normal sub-problem carries
+(W, M1, M2 | ω3, φ1, φ2), the tangential one (T1, T2, M3 | ω1, ω2, φ3): force control is a
+constraint row of the inner problem whose multiplier is the rigid motion, displacement
+control a known rigid motion in its linear term. Without :class:`Controls` (W and T given)
+the rotations are held at zero, as the solver always did.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from .normal import NormalResult, solve_normal
-from .tangential import solve_scalar, solve_vector
+from .cg import Constraints
+from .normal import NormalControl, NormalResult, solve_normal
+from .tangential import force_rows, solve_scalar, solve_vector
 
-__all__ = ["InstantResult", "Previous", "Tolerances", "solve_instant"]
+__all__ = ["Controls", "FREEDOMS", "InstantResult", "Previous", "Tolerances",
+           "solve_instant"]
+
+#: The six freedoms, in the order of :class:`Controls`' arrays: (force, motion) names.
+FREEDOMS = (("W", "omega3"), ("T1", "omega1"), ("T2", "omega2"), ("M1", "phi1"),
+            ("M2", "phi2"), ("M3", "phi3"))
 
 #: Loosest inner tolerance of the first passes of a coupled instant [1].
 FIRST_PASS_TOLERANCE = 1e-4
@@ -56,6 +70,59 @@ class Tolerances:
 
 
 @dataclass(frozen=True)
+class Controls:
+    """How the six freedoms of body 1 relative to body 2 are held at one instant.
+
+    Attributes
+    ----------
+    force : ndarray (6,)
+        W [N], T1, T2 [N], M1, M2, M3 [N m] (:data:`FREEDOMS` order); NaN where the
+        freedom is displacement-controlled. M1 = Δ Σ p x2, M2 = Δ Σ p x1,
+        M3 = Δ Σ (q2 x1 − q1 x2).
+    motion : ndarray (6,)
+        ω3 [m], ω1, ω2 [m], φ1, φ2, φ3 [rad] (totals since the start); NaN where the
+        freedom is force-controlled. The gap is h = hi + u3 − ω3 − φ1 x2 − φ2 x1; φ3
+        moves body 1's surface point by (−φ3 x2, φ3 x1) in the slip (eq. 4).
+    x1, x2 : ndarray, optional
+        Cell centres (N1,), (N2,) [m]: the moment arms (needed when a moment is
+        force-controlled or a rotation is not zero).
+    """
+
+    force: np.ndarray
+    motion: np.ndarray
+    x1: np.ndarray | None = None
+    x2: np.ndarray | None = None
+
+    @classmethod
+    def forces(cls, W, T) -> "Controls":
+        """W and T force-controlled, the three rotations held at zero."""
+        T = np.asarray(T, dtype=float)
+        nan = np.nan
+        return cls(np.array([float(W), T[0], T[1], nan, nan, nan]),
+                   np.array([nan, nan, nan, 0.0, 0.0, 0.0]))
+
+    def is_force(self, i: int) -> bool:
+        """Freedom ``i`` (:data:`FREEDOMS` order) is force-controlled."""
+        return not np.isnan(self.force[i])
+
+    def normal(self) -> NormalControl | None:
+        """The normal sub-problem's part (None: W force-controlled, φ1 = φ2 = 0)."""
+        ctl = NormalControl(self.force[[0, 3, 4]], self.motion[[0, 3, 4]], self.x1, self.x2)
+        return None if ctl.legacy else ctl
+
+    @property
+    def tangential_legacy(self) -> bool:
+        """T force-controlled and φ3 held at zero: the force rows alone."""
+        return self.is_force(1) and not self.is_force(5) and self.motion[5] == 0.0
+
+    def arms(self):
+        """(x1, x2) on the grid (N1, N2) and the normalising length L [m]."""
+        X1, X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
+        L = max(float(np.abs(self.x1).max()), float(np.abs(self.x2).max()), 1e-300)
+        return X1, X2, L
+
+
+@dataclass(frozen=True)
 class Previous:
     """What the solve of an instant takes from the instant before.
 
@@ -69,13 +136,18 @@ class Previous:
         Warm start of the pressure [Pa].
     normal : NormalResult, optional
         The previous normal solution, reused as it is. Give it only when the normal
-        problem is known to be unchanged (no coupling, no memory, the same W).
+        problem is known to be unchanged (no coupling, no memory, the same controls).
+    motion : ndarray (6,), optional
+        The rigid motions reached at the previous instant (ω3, ω1, ω2, φ1, φ2, φ3) [m,
+        rad]: a displacement-controlled tangential freedom moves by the difference.
+        Absent: zeros (from rest).
     """
 
     q: np.ndarray
     u: np.ndarray
     p_guess: np.ndarray
     normal: NormalResult | None = None
+    motion: np.ndarray | None = None
 
 
 @dataclass
@@ -91,19 +163,25 @@ class InstantResult:
     residual: float          # worst inner residual, or the last pressure change
     failed: str = ""         # which solve failed, if any
     normal: NormalResult | None = None   # the last normal solve (reusable by the caller)
+    phi: np.ndarray = field(default_factory=lambda: np.zeros(2))   # (φ1, φ2) reached [rad]
+    dphi3: float = 0.0       # rotation increment Δφ3 [rad]
 
 
 class _Instant:
     """The two uncoupled solves of one instant, with what they share."""
 
-    def __init__(self, op, gap, U, W, T, cell_area, mu, plan, previous, limits):
-        self.op, self.gap, self.U, self.W, self.cell = op, gap, U, W, cell_area
-        self.T = np.asarray(T, dtype=float)
+    def __init__(self, op, gap, U, controls, cell_area, mu, plan, previous, limits):
+        self.op, self.gap, self.U, self.cell = op, gap, U, cell_area
+        self.ctl = controls
+        self.W = float(controls.force[0])          # NaN under approach control
+        self.T = np.array(controls.force[1:3], dtype=float)
         self.mu, self.prev, self.lim = mu, previous, limits
         self.tang = plan.tangential
         self.coupled = plan.coupling != "none"
         self.vector = self.tang == "vector"
         self.its, self.passes = 0, 1
+        self.normal_ctl = controls.normal()
+        self.rows = None if controls.tangential_legacy else self._tangential_rows()
 
     def normal(self, q, p_start, tol, Ap0=None):
         """UNC: the pressure under the gap opened or closed by the shear q."""
@@ -111,7 +189,36 @@ class _Instant:
         u3q = (op.coupling_to_normal(q[0], q[1] if self.vector else None)
                if self.coupled and np.any(q) else 0.0)
         return solve_normal(op, self.gap + self.U[2] + u3q, self.W, self.cell, p_start, tol,
-                            self.lim.max_iter, Ap0=Ap0)
+                            self.lim.max_iter, Ap0=Ap0, control=self.normal_ctl)
+
+    def _tangential_rows(self):
+        """(rows of the force-controlled tangential freedoms, the known rigid motion
+        increment (2, N1, N2) of the displacement-controlled ones, the row meanings)."""
+        ctl, shape = self.ctl, self.gap.shape
+        prev = self.prev.motion if self.prev.motion is not None else np.zeros(6)
+        known = np.zeros((2,) + shape)
+        rows, targets, which = [], [], []
+        if ctl.is_force(1):
+            rows.extend(force_rows(shape, self.T, self.cell).rows[: 2 if self.vector else 1])
+            targets.extend((self.T / self.cell)[: 2 if self.vector else 1])
+            which.extend([1, 2][: 2 if self.vector else 1])
+        else:
+            d = np.asarray(ctl.motion[1:3], float) - prev[1:3]
+            known += d[:, None, None]
+        if ctl.is_force(5) or ctl.motion[5] != prev[5]:
+            X1, X2, L = ctl.arms()
+            twist = np.stack([-X2, X1])
+            if ctl.is_force(5):
+                rows.append(twist / L)
+                targets.append(ctl.force[5] / self.cell / L)
+                which.append(5)
+            else:
+                known += (ctl.motion[5] - prev[5]) * twist
+        lead = (2,) if self.vector else ()
+        rows = [r if self.vector else r[0] for r in rows]
+        con = Constraints(np.array(rows).reshape((len(rows),) + lead + shape), targets,
+                          sums=all(w in (1, 2) for w in which))
+        return con, known, which
 
     def tangential(self, p, q, tol, Aq0=None):
         """UTC: the shear under the bound mu p; returns it with (u1, u2) from p (or None)."""
@@ -120,11 +227,41 @@ class _Instant:
         bound = self.mu * p
         if self.vector:
             b = U[:2] - u_prev[:2] + (up if up is not None else 0.0)
+            if self.rows is not None:
+                con, known, _ = self.rows
+                return solve_vector(op, b - known, bound, None, self.cell, q, tol,
+                                    self.lim.max_iter, Aq0, rows=con), up
             return solve_vector(op, b, bound, self.T, self.cell, q, tol, self.lim.max_iter,
                                 Aq0), up
         b = U[0] - u_prev[0] + (up[0] if up is not None else 0.0)
-        return solve_scalar(op, b, bound, self.T[0], self.cell, q[0], tol, self.lim.max_iter,
+        T1 = self.T[0]
+        if self.rows is not None:
+            con, known, _ = self.rows
+            b, T1 = b - known[0], (self.T[0] if con.m else None)
+        return solve_scalar(op, b, bound, T1, self.cell, q[0], tol, self.lim.max_iter,
                             None if Aq0 is None else Aq0[0]), up
+
+    def motions(self, t_res):
+        """(Δω1, Δω2, Δφ3) of a tangential solution: multipliers or known increments."""
+        if self.rows is None:
+            return t_res.domega, 0.0
+        con, _, which = self.rows
+        prev = self.prev.motion if self.prev.motion is not None else np.zeros(6)
+        inc = np.concatenate([[0.0], np.asarray(self.ctl.motion[1:], float) - prev[1:]])
+        inc = np.where(np.isnan(inc), 0.0, inc)
+        lam = t_res.multipliers if t_res.multipliers is not None else t_res.domega[:con.m]
+        if 1 in which and not self.vector:
+            lam = [t_res.domega[0]] + list(lam[1:])
+        _, _, L = self.ctl.arms() if 5 in which else (None, None, 1.0)
+        for j, i in enumerate(which):
+            inc[i] = lam[j] / (L if i == 5 else 1.0)
+        return inc[1:3].copy(), float(inc[5])
+
+    def capacity(self, p, W):
+        """The largest |T| the bounds can carry: mu W, or Σ mu p Δ with a mapped mu [N]."""
+        if np.ndim(self.mu) == 0:
+            return self.mu * W
+        return float(np.sum(self.mu * p)) * self.cell
 
     def failure(self, what, res, p, q, domega):
         return InstantResult(p, q, self.U, getattr(res, "omega3", 0.0), domega, self.its,
@@ -149,7 +286,7 @@ class _Instant:
 
 
 def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
-                  limits: Tolerances) -> InstantResult:
+                  limits: Tolerances, controls: Controls | None = None) -> InstantResult:
     """Solve one instant of the coupled contact.
 
     Parameters
@@ -161,29 +298,35 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     U : ndarray (3, N1, N2)
         Known relative displacement (viscoelastic history) [m].
     W : float
-        Normal force [N].
+        Normal force [N] (ignored when ``controls`` is given).
     T : array_like (2,)
-        Tangential force [N].
+        Tangential force [N] (ignored when ``controls`` is given).
     cell_area : float
         Area of one cell [m²].
-    mu : float
-        Friction coefficient [1].
+    mu : float or ndarray (N1, N2)
+        Friction coefficient [1], uniform or mapped.
     plan : Plan
         The sub-models (``tangential``: none/scalar/vector; ``coupling``).
     previous : Previous
         The previous instant's shear, displacement, pressure guess (and normal solution).
     limits : Tolerances
         Tolerance, iterations per solve, coupling passes.
+    controls : Controls, optional
+        Force or displacement control of each of the six freedoms; absent: W and T
+        force-controlled, the rotations held at zero.
 
     Returns
     -------
     InstantResult
         ``converged`` False with ``failed`` naming the sub-problem that stopped: "normal",
-        "tangential" (also when |T| > mu W (1 + tol): no shear within the bounds carries
-        it; ``residual`` is then (|T| - mu W) / (mu W)), or "coupling" (the passes did not
-        settle in ``limits.max_passes``).
+        "tangential" (also when a force-controlled |T| > mu W (1 + tol): no shear within
+        the bounds carries it; ``residual`` is then (|T| - mu W) / (mu W)), or "coupling"
+        (the passes did not settle in ``limits.max_passes``). Under displacement control
+        of the tangential freedoms full sliding (every contact cell at |q| = mu p) is a
+        valid state, and under approach control so is a contact that opened (p = 0).
     """
-    s = _Instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits)
+    ctl = controls if controls is not None else Controls.forces(W, T)
+    s = _Instant(op, gap, U, ctl, cell_area, mu, plan, previous, limits)
     tol = limits.tol
     q = previous.q.copy() if s.tang != "none" else np.zeros_like(previous.q)
     worst, change = 0.0, np.inf
@@ -196,13 +339,16 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     if not n.converged:
         return s.failure("normal", n, n.p, q, np.zeros(2))
     p = n.p
-    domega = np.zeros(2)
+    W = s.W if ctl.is_force(0) else float(p.sum()) * cell_area
+    domega, dphi3 = np.zeros(2), 0.0
     t_res, up = None, None
-    excess = float(np.hypot(*s.T)) - mu * W
-    if s.tang != "none" and excess > tol * mu * W:
-        # no shear within the bounds mu p carries T: the contact slides as a whole
-        return InstantResult(p, q, U, n.omega3, domega, s.its, s.passes, False,
-                             excess / max(mu * W, 1e-300), "tangential", n)
+    if ctl.is_force(1):
+        capacity = s.capacity(p, W)
+        excess = float(np.hypot(*s.T)) - capacity
+        if s.tang != "none" and excess > tol * capacity:
+            # no shear within the bounds mu p carries T: the contact slides as a whole
+            return InstantResult(p, q, U, n.omega3, domega, s.its, s.passes, False,
+                                 excess / max(capacity, 1e-300), "tangential", n)
 
     # -- tangential, and the coupling loop ------------------------------------------------
     if s.tang != "none" and op.rigid:
@@ -215,7 +361,8 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         s.its += t_res.iterations
         if not t_res.converged:
             return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
-        q, domega = t_res.q, t_res.domega
+        q = t_res.q
+        domega, dphi3 = s.motions(t_res)
         while s.coupled:
             s.passes += 1
             if s.passes > limits.max_passes:
@@ -225,6 +372,7 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
             s.its += n.iterations
             if not n.converged:
                 return s.failure("normal", n, n.p, q, domega)
+            W = s.W if ctl.is_force(0) else float(n.p.sum()) * cell_area
             change = float(np.abs(n.p - p).sum()) * cell_area / max(W, 1e-300)
             p = n.p
             last = inner == tol
@@ -233,10 +381,12 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
             s.its += t_res.iterations
             if not t_res.converged:
                 return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
-            q, domega = t_res.q, t_res.domega
+            q = t_res.q
+            domega, dphi3 = s.motions(t_res)
             if change < tol and last:
                 break
         worst = max(worst, t_res.residual)
 
     u = s.displacement(n, q, t_res, up)
-    return InstantResult(p, q, u, n.omega3, domega, s.its, s.passes, True, worst, normal=n)
+    return InstantResult(p, q, u, n.omega3, domega, s.its, s.passes, True, worst, normal=n,
+                         phi=np.asarray(n.phi, float).copy(), dphi3=dphi3)

@@ -1,19 +1,27 @@
-"""The uncoupled normal contact problem (UNC): pressure and contact area under force control.
+"""The uncoupled normal contact problem (UNC): pressure and contact area.
 
 With every tangential traction and the viscoelastic history known (added to the gap), find
-the pressure p >= 0 and the approach omega3 such that the gap closes where p > 0, stays open
-elsewhere and the pressure carries W (paper eqs. 1, 3, 5). The solver is Polonsky & Keer's
-conjugate-gradient method (:func:`contactpipe.solver.cg.box_cg` with lo = 0, hi = inf).
+the pressure p >= 0 such that the gap (paper eq. 3)
+
+    h = hi + u3 − ω3 − φ1 x2 − φ2 x1
+
+closes where p > 0 and stays open elsewhere (eq. 5), and the pressure carries what is
+force-controlled of W = Δ Σ p, M1 = Δ Σ p x2, M2 = Δ Σ p x1 (eq. 1). The solver is
+Polonsky & Keer's conjugate-gradient method (:func:`contactpipe.solver.cg.box_cg` with
+lo = 0, hi = inf): a force-controlled freedom is a constraint row whose multiplier is its
+rigid motion (ω3, φ1, φ2: the gap is affine in them); a displacement-controlled one is a
+known rigid motion in the linear term. Under force control of W alone with the rotations
+held at zero (:class:`NormalControl` absent) it is the one-row solver of before.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cg import box_cg
+from .cg import Constraints, box_cg
 
-__all__ = ["NormalResult", "solve_normal"]
+__all__ = ["NormalControl", "NormalResult", "solve_normal"]
 
 
 @dataclass
@@ -24,10 +32,44 @@ class NormalResult:
     iterations: int
     residual: float
     converged: bool
+    phi: np.ndarray = field(default_factory=lambda: np.zeros(2))   # (φ1, φ2) [rad]
 
 
-def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None) -> NormalResult:
-    """Frictionless normal problem under force control (Polonsky & Keer 1999).
+@dataclass(frozen=True)
+class NormalControl:
+    """How the normal sub-problem's three freedoms are held at one instant.
+
+    Attributes
+    ----------
+    force : ndarray (3,)
+        W [N], M1, M2 [N m]; NaN where the freedom is displacement-controlled.
+    motion : ndarray (3,)
+        ω3 [m], φ1, φ2 [rad]; NaN where the freedom is force-controlled.
+    x1, x2 : ndarray
+        Cell centres (N1,), (N2,) [m]: the moment arms.
+    """
+
+    force: np.ndarray
+    motion: np.ndarray
+    x1: np.ndarray
+    x2: np.ndarray
+
+    @property
+    def legacy(self) -> bool:
+        """W force-controlled and both rotations held at zero: the one-row problem."""
+        return (not np.isnan(self.force[0]) and np.isnan(self.force[1:]).all()
+                and np.all(self.motion[1:] == 0.0))
+
+    def arms(self):
+        """(x1, x2) on the grid (N1, N2) and the normalising length L [m]."""
+        X1, X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
+        L = max(float(np.abs(self.x1).max()), float(np.abs(self.x2).max()), 1e-300)
+        return X1, X2, L
+
+
+def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
+                 control: NormalControl | None = None) -> NormalResult:
+    """Normal problem (Polonsky & Keer 1999), with up to three multipliers.
 
     Parameters
     ----------
@@ -35,12 +77,56 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None) -> NormalR
     gap0 : ndarray
         Initial gap plus every known normal displacement [m].
     W : float
-        Normal force [N].
+        Normal force [N] (ignored when ``control`` is given).
     p0 : ndarray
         Warm start [Pa].
     Ap0 : ndarray, optional
         K33 ⊛ p0 when known (saves one FFT pair).
+    control : NormalControl, optional
+        Force or displacement control of each of (W, M1, M2) / (ω3, φ1, φ2). Absent: W
+        force-controlled and the rotations held at zero.
+
+    Returns
+    -------
+    NormalResult
+        ``omega3`` and ``phi`` are the multipliers of the force-controlled freedoms and the
+        given values of the others. Under displacement control the contact may open
+        entirely: p = 0 everywhere is then the (converged) answer.
     """
+    if control is not None and control.legacy:
+        W, control = float(control.force[0]), None
+    if control is None:
+        return _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0)
+    if op.rigid:
+        # no compliance for this increment: only a force-controlled W has a meaning there
+        return NormalResult(np.zeros_like(gap0), np.nan, np.zeros_like(gap0), 0, np.inf,
+                            False)
+    X1, X2, L = control.arms()
+    force, motion = np.asarray(control.force, float), np.asarray(control.motion, float)
+    arms = (np.ones_like(gap0), X2 / L, X1 / L)     # rows of W, M1, M2 (normalised)
+    fields = (np.ones_like(gap0), X2, X1)           # the gap's change per ω3, φ1, φ2
+    b = np.array(gap0, dtype=float)
+    rows, targets, which = [], [], []
+    for i in range(3):
+        if np.isnan(force[i]):
+            if motion[i] != 0.0:
+                b = b - motion[i] * fields[i]
+        else:
+            rows.append(arms[i])
+            targets.append(force[i] / cell_area / (1.0 if i == 0 else L))
+            which.append(i)
+    con = Constraints(np.array(rows).reshape((len(rows),) + gap0.shape), targets)
+    res = box_cg(op.normal, b, np.zeros_like(gap0), np.full_like(gap0, np.inf), con, p0,
+                 tol=tol, max_iter=max_iter, restore="scale", Ax0=Ap0)
+    reached = motion.copy()
+    for j, i in enumerate(which):
+        reached[i] = res.multiplier[j] / (1.0 if i == 0 else L)
+    return NormalResult(res.x, float(reached[0]), res.Ax, res.iterations, res.residual,
+                        res.converged, phi=reached[1:].copy())
+
+
+def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0):
+    """W force-controlled, rotations held at zero (the one-row problem)."""
     if W <= 0.0:
         return NormalResult(np.zeros_like(gap0), float(gap0.min()), np.zeros_like(gap0), 0,
                             0.0, True)

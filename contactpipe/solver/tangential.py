@@ -22,8 +22,17 @@ Two forms:
 * ``vector`` — the full problem with a disk |q| ≤ μp per cell: projected conjugate
   gradients in the spirit of Vollebregt's TangCG (2014): conjugate directions on the
   stick cells and on slip cells whose residual points inwards; slip cells keep |q| = μp
-  and turn towards the slip direction; the force is restored by a clipped shift of the
-  stick cells. Two FFT pairs per operator application.
+  and turn towards the slip direction; the force is restored by projecting the stick
+  cells onto their disks and the force rows (a dual Newton solve for the shift vector,
+  :func:`contactpipe.solver.cg.project_rows`). Two FFT pairs per operator application.
+
+General rows (:class:`~contactpipe.solver.cg.Constraints`): besides the force rows
+Σq1 = T1/Δ, Σq2 = T2/Δ, the vector form takes the torque row Σ(q2 x1 − q1 x2) = M3/Δ (its
+multiplier is the rotation increment Δφ3), or no row at all under displacement control
+(the known rigid motion is then part of ``b``, and full sliding, every cell on its bound,
+is a valid solution). When no cell sticks, the multipliers are those that best align each
+slip increment with its traction (:func:`slip_multipliers`), so that a rigid shift of the
+known displacement shifts them alike.
 """
 from __future__ import annotations
 
@@ -31,9 +40,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import box_cg, fista, project_box_sum
+from .cg import Constraints, box_cg, disk_project, fista, project_box_sum, project_rows
 
-__all__ = ["TangentialResult", "solve_scalar", "solve_vector", "disk_project"]
+__all__ = ["TangentialResult", "solve_scalar", "solve_vector", "disk_project",
+           "project_disks_sum", "force_rows", "slip_multipliers"]
 
 
 @dataclass
@@ -44,6 +54,23 @@ class TangentialResult:
     iterations: int
     residual: float
     converged: bool
+    multipliers: np.ndarray | None = None   # (m,) of the rows given (general rows only)
+
+
+def force_rows(shape, T, cell_area) -> Constraints:
+    """The force rows Σq1 = T1/Δ, Σq2 = T2/Δ of the vector form on a grid of ``shape``."""
+    n1, n2 = shape
+    rows = np.zeros((2, 2, n1, n2))
+    rows[0, 0] = 1.0
+    rows[1, 1] = 1.0
+    return Constraints(rows, np.asarray(T, dtype=float) / cell_area, sums=True)
+
+
+def _infeasible(x, con, target, scale, tol) -> bool:
+    """The rows are not met (a force beyond what the bounds can carry)."""
+    if con is None:
+        return abs(float(x.sum()) - target) / scale >= tol
+    return float(np.abs(con.residual(x)).max(initial=0.0)) / scale >= tol
 
 
 def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
@@ -54,16 +81,24 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
     op : ContactOperator
         Provides ``tangential_scalar`` (K11 ⊛ q1).
     b1 : ndarray
-        Known in-plane displacement minus the previous one, u1_known − u1(k−1) [m].
+        Known in-plane displacement minus the previous one, u1_known − u1(k−1) [m]; under
+        displacement control also minus the known rigid shift increment Δω1.
     bound : ndarray
         μp [Pa] (zero outside the contact).
-    T1 : float
-        Tangential force [N].
+    T1 : float or None
+        Tangential force [N]; None under displacement control (no force row: the
+        returned ``domega`` is then 0, the caller knows the shift).
     q0 : ndarray
         Warm start for q1 [Pa].
+
+    Notes
+    -----
+    ``converged`` is False when the bounds cannot carry T1 (|T1| > Σμp Δ), whichever of
+    the CG or its projected-gradient fallback ran last.
     """
     scale = max(float(bound.sum()), 1e-300)
-    target = T1 / cell_area
+    con = Constraints.none(b1.shape) if T1 is None else None
+    target = con if con is not None else T1 / cell_area
 
     def cg(x0, Ax0, tol_, budget):
         r = box_cg(op.tangential_scalar, b1, -bound, bound, target, x0, tol=tol_,
@@ -71,58 +106,56 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
         return r.x, r.Ax, r.iterations, r.residual, r.converged
 
     def pg(x0, Ax0, tol_, budget):
-        return fista(op.tangential_scalar, b1,
-                     lambda y: project_box_sum(y, -bound, bound, target), x0,
-                     op.tangential_norm(1), tol_, budget, scale, Ax0=Ax0)
+        if con is not None:
+            project = lambda y: np.clip(y, -bound, bound)            # noqa: E731
+        else:
+            project = lambda y: project_box_sum(y, -bound, bound, target)  # noqa: E731
+        x, Ax, its, err, ok = fista(op.tangential_scalar, b1, project, x0,
+                                    op.tangential_norm(1), tol_, budget, scale, Ax0=Ax0)
+        return x, Ax, its, err, ok and not _infeasible(x, con, target, scale, tol_)
 
     x, Ax, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
     stick = (bound > 0) & (np.abs(x) < bound * (1.0 - 1e-12))
-    lam = float(_multiplier((Ax + b1)[None], stick)[0])
+    if con is not None:
+        lam = 0.0
+    elif _pinned(stick, np.abs(x), bound):
+        lam = float(_multiplier((Ax + b1)[None], stick)[0])
+    else:
+        lam = float(slip_multipliers(Ax + b1, x, bound, None)[0])
     q = np.zeros((2,) + b1.shape)
     q[0] = x
     Aq = np.zeros_like(q)
     Aq[0] = Ax
     return TangentialResult(q=q, domega=np.array([lam, 0.0]), Aq=Aq, iterations=its,
-                            residual=err, converged=ok)
+                            residual=err, converged=ok,
+                            multipliers=np.zeros(0) if con is not None else None)
 
 
-def disk_project(q, rho):
-    """Radial projection of each cell's vector onto the disk |q| ≤ rho. Returns (q, at_bound)."""
-    mag = np.hypot(q[0], q[1])
-    over = mag > rho
-    if over.any():
-        f = np.where(over, rho / np.where(mag > 0, mag, 1.0), 1.0)
-        q = q * f
-    return q, over
-
-
-def _restore_vector(q, rho, target, stick):
-    """Shift the stick cells by one vector c (then project) so that Σq = target (2,)."""
+def _restore_vector(q, rho, con, stick):
+    """Meet the rows again by projecting the stick cells (then, when they cannot carry
+    them, every contact cell) onto their disks and the rows: one shift vector, found by
+    a dual Newton solve (:func:`contactpipe.solver.cg.project_rows`)."""
+    if con.m == 0:
+        return q
     for cells in (stick, rho > 0):
-        n = int(np.count_nonzero(cells))
-        if n == 0:
+        if not cells.any():
             continue
-        c = np.zeros(2)
-        for _ in range(100):
-            y = q[:, cells] + c[:, None]
-            y, _ = disk_project(y, rho[cells])
-            total = y.sum(axis=1) + q[:, ~cells].sum(axis=1)
-            f = total - target
-            if np.abs(f).max() <= 1e-13 * (np.abs(target).max() + rho.sum()):
-                break
-            inside = np.count_nonzero(np.hypot(y[0], y[1]) < rho[cells]) or n
-            c -= f / inside
-        out = q.copy()
-        out[:, cells] = y
-        if np.abs(out.sum(axis=(1, 2)) - target).max() <= 1e-11 * (np.abs(target).max() + rho.sum()):
+        out = project_rows(q, con, cells, "disk", rho=rho)
+        tol = 1e-11 * (np.abs(con.target).max(initial=0.0) + rho.sum())
+        if np.abs(con.residual(out)).max() <= tol:
             return out
         q = out
     return q
 
 
-def _vector_cg(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
-    """Full vector form by projected CG (the fast path of :func:`solve_vector`, same
-    parameters).
+#: Iterations of the vector CG without halving its best step before it hands over to
+#: the projected gradient (it stalls where nearly every cell turns on its circle) [1].
+STALL = 50
+
+
+def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
+    """Full vector form by projected CG (the fast path of :func:`solve_vector`; ``con``
+    the rows, :class:`~contactpipe.solver.cg.Constraints` on (2, N1, N2)).
 
     Notes
     -----
@@ -138,34 +171,37 @@ def _vector_cg(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
       by ρa/(ρa + |r·q̂|) relative to a stick cell; the previous direction is transported
       to the current tangents;
     * after the exact line search, stick cells pushed past the disk are projected radially
-      (they join the slip set) and turning cells are put back on their circles; the force
-      is restored by a shift of the stick cells.
+      (they join the slip set) and turning cells are put back on their circles; the rows
+      are restored by projecting the stick cells (:func:`_restore_vector`).
 
     Each iteration costs one operator application (two FFT pairs) and a second one when
-    a projection changed the iterate.
+    a projection changed the iterate. It stops, not converged, when :data:`STALL`
+    iterations pass without halving its best step.
     """
-    target = np.asarray(T, dtype=float) / cell_area
     rho = bound
     movable = rho > 0
     a_self = op.self_influence("11")
     q, _ = disk_project(np.where(movable, q0, 0.0), rho)
-    q = _restore_vector(q, rho, target, movable & (np.hypot(q[0], q[1]) < rho))
+    q = _restore_vector(q, rho, con, movable & (np.hypot(q[0], q[1]) < rho))
     Aq = op.tangential_vector(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
     scale = max(float(rho.sum()), 1e-300)
     t = np.zeros_like(q)
     rz_old = 1.0
     sets_old = None
     err = np.inf
-    lam = np.zeros(2)
+    lam = np.zeros(con.m)
+    best, best_it = np.inf, 0
     it = 0
     for it in range(1, max_iter + 1):
+        if it - best_it > STALL:    # no progress: leave it to the projected gradient
+            break
         g = Aq + b
         mag = np.hypot(q[0], q[1])
         at_bound = movable & (mag >= rho * (1.0 - 1e-12))
         stick = movable & ~at_bound
         if stick.any():
-            lam = g[:, stick].mean(axis=1)
-        gr = g - lam[:, None, None]
+            lam = con.fit(g, stick)
+        gr = g - con.field(lam)
         qhat = np.where(at_bound, q / np.where(mag > 0, mag, 1.0), 0.0)
         radial = qhat[0] * gr[0] + qhat[1] * gr[1]
         released = at_bound & (radial > 0)
@@ -176,11 +212,10 @@ def _vector_cg(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
             w = np.where(turning, rho * a_self / (rho * a_self + np.abs(radial)), 1.0)
         gt = np.where(turning, gr - radial * qhat, gr)
         z = np.where(free | turning, gt * w, 0.0)
-        if free.any():          # keep Σ z = 0: the force stays put along the direction
-            z[:, free] -= (z.sum(axis=(1, 2)) / np.count_nonzero(free))[:, None]
+        z = con.keep(z, free)   # the rows stay put along the direction
         rz = float(np.sum(gt * z))
-        if rz <= 0.0:
-            err = 0.0
+        if not rz > 0.0:
+            err = 0.0 if rz <= 0.0 else np.inf
             break
         sets = (free, turning)
         reset = (released.any() or sets_old is None
@@ -213,7 +248,7 @@ def _vector_cg(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
         fix = over | (turning & (m > 0))
         if fix.any():
             q_new[:, fix] *= rho[fix] / m[fix]
-            q_new = _restore_vector(q_new, rho, target, stick & ~over)
+            q_new = _restore_vector(q_new, rho, con, stick & ~over)
             err = np.abs(q_new - q).sum() / scale
             q = q_new
             Aq = op.tangential_vector(q)
@@ -221,65 +256,55 @@ def _vector_cg(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
             err = np.abs(q_new - q).sum() / scale
             q = q_new
             Aq = Aq - tau * r
+        if not err >= 0.0:      # NaN: the iterate is lost
+            err = np.inf
+            break
         if err < tol:
             break
-    g = Aq + b
-    mag = np.hypot(q[0], q[1])
-    stick = movable & (mag < rho * (1.0 - 1e-12))
-    if stick.any():
-        lam = g[:, stick].mean(axis=1)
-    return TangentialResult(q=q, domega=lam, Aq=Aq, iterations=it, residual=float(err),
-                            converged=bool(err < tol))
+        if err < 0.5 * best:
+            best, best_it = err, it
+    err = max(float(err), float(np.abs(con.residual(q)).max(initial=0.0)) / scale)
+    ok = bool(err < tol) and bool(np.all(np.isfinite(q)))
+    lam = multipliers(con, Aq + b, q, rho)
+    return TangentialResult(q=q, domega=np.zeros(2), Aq=Aq, iterations=it, residual=err,
+                            converged=ok, multipliers=lam)
 
 
 def project_disks_sum(y, rho, target):
     """Euclidean projection of y (2, N1, N2) onto {|x_i| ≤ rho_i, Σ x_i = target}.
 
-    x_i = P_disk(y_i − ν) with the multiplier ν (2,) found by Newton's method on the
-    monotone map ν ↦ Σ P_disk(y_i − ν) (its Jacobian is Σ of the disk projections'
-    Jacobians: I inside, (ρ/|z|)(I − ẑẑᵀ) on the rim).
+    x_i = P_disk(y_i − ν) with the multiplier ν (2,) from the damped dual Newton
+    iteration of :func:`contactpipe.solver.cg.project_rows` (its Jacobian is the sum of
+    the disk projections' Jacobians: I inside, (ρ/|z|)(I − ẑẑᵀ) on the rim); x = 0 where
+    rho = 0.
     """
     cells = rho > 0
-    ys, rs = y[:, cells], rho[cells]
-    nu = (ys.sum(axis=1) - target) / max(np.count_nonzero(cells), 1)
-    for _ in range(100):
-        z = ys - nu[:, None]
-        m = np.hypot(z[0], z[1])
-        out = m > rs
-        f = np.where(out, rs / np.where(m > 0, m, 1.0), 1.0)
-        x = z * f
-        res = x.sum(axis=1) - target
-        if np.abs(res).max() <= 1e-13 * (np.abs(target).max() + rs.sum()):
-            break
-        zh = np.where(out, z / np.where(m > 0, m, 1.0), 0.0)
-        J = np.eye(2) * np.count_nonzero(~out)
-        fo = f[out]
-        J = J + np.array([[np.sum(fo * (1 - zh[0, out] ** 2)), -np.sum(fo * zh[0, out] * zh[1, out])],
-                          [-np.sum(fo * zh[0, out] * zh[1, out]), np.sum(fo * (1 - zh[1, out] ** 2))]])
-        try:
-            step = np.linalg.solve(J + 1e-14 * np.trace(J) * np.eye(2), res)
-        except np.linalg.LinAlgError:
-            step = res / max(np.count_nonzero(cells), 1)
-        nu = nu + step
-    xout = np.zeros_like(y)
-    xout[:, cells] = x
-    return xout
+    con = force_rows(rho.shape, target, 1.0)
+    return project_rows(np.where(cells, y, 0.0), con, cells, "disk", rho=rho)
 
 
-def _cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter):
+def _cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter, sliding=None):
     """CG first; where it stalls, the projected gradient to a loose tolerance (it finds the
     slip/stick pattern that pins the multiplier), then CG again from there; the projected
     gradient, which always converges, finishes if CG stalls a second time.
 
     ``cg`` and ``pg`` take (x0, Ax0, tol, budget) and return (x, Ax, iterations, residual,
-    converged). Returns the same tuple, iterations summed.
+    converged). Returns the same tuple, iterations summed. ``sliding(x)``, when given, says
+    that no cell of x sticks: the projected gradient then runs alone (the projected CG
+    stalls where every cell turns on its circle, as in gross slip, while the projected
+    gradient converges in a few dozen iterations there).
     """
     budget = max(1, max_iter // 4)
+    if sliding is not None and np.any(x0) and sliding(x0):
+        return pg(x0, Ax0, tol, max_iter)
     x, Ax, its, err, ok = cg(x0, Ax0, tol, budget)
     if ok:
         return x, Ax, its, err, ok
     x, Ax, more, err, _ = pg(x, Ax, max(tol, 1e-6), budget)
     its += more
+    if sliding is not None and sliding(x):
+        x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
+        return x, Ax, its + more, err, ok
     x, Ax, more, err, ok = cg(x, Ax, tol, budget)
     its += more
     if ok:
@@ -292,7 +317,89 @@ def _multiplier(g, stick):
     return g[..., stick].mean(axis=-1) if stick.any() else np.zeros(g.shape[:-2])
 
 
-def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
+def multipliers(con, g, q, bound):
+    """The rows' multipliers of a vector solution: fitted to the stick cells, or where
+    no cell sticks, to the slip directions (:func:`slip_multipliers`)."""
+    mag = np.hypot(q[0], q[1])
+    stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
+    if con.m == 0:
+        return np.zeros(0)
+    if _pinned(stick, mag, bound):
+        return con.fit(g, stick)
+    return slip_multipliers(g, q, bound, con)
+
+
+#: A stick cell pins the multipliers only when |q| < mu p (1 - DEEP_STICK): a cell within
+#: the solver's tolerance of its bound slips, and its slip increment is not zero [1].
+DEEP_STICK = 1e-6
+
+
+def _pinned(stick, mag, bound) -> bool:
+    """Some cell sticks clearly inside its bound (else the contact slips everywhere, up to
+    the solver's tolerance, and the multipliers follow the slip directions)."""
+    return bool(np.any(stick & (mag < bound * (1.0 - DEEP_STICK))))
+
+
+#: Passes of the active-set fit of :func:`slip_multipliers`.
+SLIP_FIT_PASSES = 20
+
+
+def slip_multipliers(g, q, bound, con):
+    """Multipliers λ when every contact cell slips: the slip increments Δs = Cᵀλ − g must
+    then point along q (|q| = μp, q·Δs ≥ 0), which no stick cell pins.
+
+    Parameters
+    ----------
+    g : ndarray
+        A q + b: (N1, N2) for the one-component form (then ``con`` is None and the row is
+        Σq1), (2, N1, N2) for the vector form.
+    q : ndarray
+        The shear, the shape of ``g``.
+    bound : ndarray (N1, N2)
+        μp.
+    con : Constraints or None
+        The vector form's rows.
+
+    Returns
+    -------
+    ndarray (m,)
+        One-component form: the middle of the interval of λ1 for which every slip
+        increment λ1 − g has the sign of q1 (its finite end when one side is open).
+        Vector form: the λ minimising Σ dist²(Δs_i, the ray along q_i), found by an
+        active-set least-squares iteration (cells whose Δs points against q count with
+        both components); a rigid shift c of g then shifts λ by c.
+    """
+    cells = bound > 0
+    if con is None:
+        up, down = cells & (q > 0), cells & (q < 0)
+        lo = float(g[up].max()) if up.any() else -np.inf
+        hi = float(g[down].min()) if down.any() else np.inf
+        if np.isfinite(lo) and np.isfinite(hi):
+            return np.array([0.5 * (lo + hi)])
+        return np.array([lo if np.isfinite(lo) else (hi if np.isfinite(hi) else 0.0)])
+    mag = np.hypot(q[0], q[1])[cells]
+    qh = q[:, cells] / np.where(mag > 0, mag, 1.0)
+    nh = np.stack([-qh[1], qh[0]])
+    A = con.rows[..., cells]                                   # (m, 2, k)
+    gs = g[:, cells]
+    perp = np.einsum("ik,mik->km", nh, A)                       # (k, m)
+    perp_rhs = np.einsum("ik,ik->k", nh, gs)
+    par = np.einsum("ik,mik->km", qh, A)
+    par_rhs = np.einsum("ik,ik->k", qh, gs)
+    against = np.zeros(mag.size, dtype=bool)
+    lam = np.zeros(con.m)
+    for _ in range(SLIP_FIT_PASSES):
+        M = np.concatenate([perp, par[against]])
+        v = np.concatenate([perp_rhs, par_rhs[against]])
+        lam = np.linalg.lstsq(M, v, rcond=None)[0]
+        now = par @ lam - par_rhs < 0.0                        # q·Δs < 0
+        if np.array_equal(now | against, against):
+            break
+        against = against | now
+    return lam
+
+
+def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=None):
     """Full vector form: disk constraint |q| ≤ μp per cell.
 
     Parameters
@@ -300,32 +407,50 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None):
     op : ContactOperator
         Provides ``tangential_vector`` ([K11 K12; K21 K22] ⊛ q).
     b : ndarray (2, N1, N2)
-        Known in-plane displacement minus the previous one [m].
+        Known in-plane displacement minus the previous one [m]; minus the known rigid
+        motion increments of the freedoms that are displacement-controlled.
     bound : ndarray (N1, N2)
         μp [Pa].
-    T : array_like (2,)
-        Tangential force [N].
+    T : array_like (2,) or None
+        Tangential force [N] (the force rows); ignored when ``rows`` is given.
     q0 : ndarray (2, N1, N2)
         Warm start [Pa].
+    rows : Constraints, optional
+        General rows on (2, N1, N2) in place of the force rows: the force rows, the
+        torque row, both, or none (displacement control). Their multipliers are returned
+        in ``multipliers``; ``domega`` is then (0, 0).
 
     Notes
     -----
     The preconditioned projected CG (:func:`_vector_cg`) runs first; where it stalls —
-    typically when (almost) every cell slips and the multiplier Δω is not pinned by stick
-    cells — see :func:`_cg_with_fallback`.
+    typically when (almost) every cell slips and the multipliers are not pinned by stick
+    cells — see :func:`_cg_with_fallback`. ``converged`` is False when the rows cannot be
+    met within the disks (|T| > Σμp Δ).
     """
-    target = np.asarray(T, dtype=float) / cell_area
+    con = rows if rows is not None else force_rows(bound.shape, T, cell_area)
     scale = max(float(bound.sum()), 1e-300)
 
     def cg(x0, Ax0, tol_, budget):
-        r = _vector_cg(op, b, bound, T, cell_area, x0, tol_, budget, Ax0)
+        r = _vector_cg(op, b, bound, con, x0, tol_, budget, Ax0)
         return r.q, r.Aq, r.iterations, r.residual, r.converged
 
     def pg(x0, Ax0, tol_, budget):
-        return fista(op.tangential_vector, b, lambda y: project_disks_sum(y, bound, target),
-                     x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
+        cells = bound > 0
+        x, Ax, its, err, ok = fista(
+            op.tangential_vector, b,
+            lambda y: project_rows(np.where(cells, y, 0.0), con, cells, "disk", rho=bound),
+            x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
+        return x, Ax, its, err, ok and not _infeasible(x, con, None, scale, tol_)
 
-    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
-    stick = (bound > 0) & (np.hypot(q[0], q[1]) < bound * (1.0 - 1e-12))
-    return TangentialResult(q=q, domega=_multiplier(Aq + b, stick), Aq=Aq,
-                            iterations=its, residual=err, converged=ok)
+    def sliding(q):
+        mag = np.hypot(q[0], q[1])
+        stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
+        return (bound > 0).any() and not _pinned(stick, mag, bound)
+
+    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter, sliding)
+    lam = multipliers(con, Aq + b, q, bound)
+    if rows is not None:
+        return TangentialResult(q=q, domega=np.zeros(2), Aq=Aq, iterations=its,
+                                residual=err, converged=ok, multipliers=lam)
+    return TangentialResult(q=q, domega=lam, Aq=Aq, iterations=its, residual=err,
+                            converged=ok)

@@ -1,0 +1,141 @@
+"""A mapped friction coefficient mu(x1, x2) read from a netCDF file (CONTRACT §2b).
+
+``[friction] mu`` is a number or the name of a netCDF file holding a variable ``mu`` over
+the dimensions ``x1``, ``x2`` (coordinates in m, any order), on the scene's grid or
+covering it. It is interpolated linearly onto the cell centres (xarray's ``interp``),
+clipped to the range of the file's values, so a uniform map gives exactly its value.
+Refused, with one message naming ``friction.mu`` and the file: a missing or unreadable
+file, no variable ``mu`` over x1, x2, coordinates that are not distinct finite numbers,
+values that are not finite or are negative, and a grid that the file does not cover.
+
+Units: mu [1], coordinates [m].
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from .exceptions import SceneError
+
+__all__ = ["check_mu_file", "mu_on_grid", "largest", "WHERE"]
+
+#: The scene key every message names.
+WHERE = "friction.mu"
+
+
+def _open(path):
+    import xarray as xr  # lazily: the numerical core does not need xarray
+
+    return xr.open_dataset(path)
+
+
+def _coordinate_problems(ds, where):
+    """(problems, {dim: (min, max)}) of the file's coordinates."""
+    problems, ranges = [], {}
+    for dim in ("x1", "x2"):
+        if dim not in ds.coords:
+            problems.append(f"{where}: dimension {dim!r} has no coordinate [m]")
+            continue
+        c = np.asarray(ds[dim].values, dtype=float)
+        if c.size < 2 or not np.all(np.isfinite(c)) or np.unique(c).size != c.size:
+            problems.append(f"{where}: coordinate {dim!r} must hold at least 2 distinct "
+                            f"finite values [m], got {c.size} value(s)")
+            continue
+        ranges[dim] = (float(c.min()), float(c.max()))
+    return problems, ranges
+
+
+def check_mu_file(file, x1=None, x2=None) -> list:
+    """Problems with a friction-map file, and with the grid when ``x1``, ``x2`` are given.
+
+    Parameters
+    ----------
+    file : str or path-like
+        A netCDF file with a variable ``mu`` [1] over dimensions ``x1``, ``x2`` [m].
+    x1, x2 : array_like, optional
+        Cell-centre coordinates of the grid [m].
+
+    Returns
+    -------
+    list of str
+        One message per problem, each naming ``friction.mu`` and the file; empty when the
+        file can serve the grid.
+    """
+    path = os.fspath(file)
+    where = f"{WHERE} = {path!r}"
+    if not os.path.isfile(path):
+        return [f"{where}: no such file (give a number >= 0, or a netCDF file with a "
+                f"variable 'mu' over x1, x2)"]
+    try:
+        ds = _open(path)
+    except Exception as exc:  # noqa: BLE001 - any failure to read is the user's file
+        return [f"{where}: not a readable netCDF file ({type(exc).__name__}: {exc})"]
+    with ds:
+        if "mu" not in ds.data_vars:
+            found = ", ".join(map(str, ds.data_vars)) or "none"
+            return [f"{where}: no variable 'mu' (found: {found}); the friction coefficient "
+                    f"must be a variable 'mu' over dimensions x1, x2"]
+        mu = ds["mu"]
+        if mu.dtype.kind not in "iuf":
+            return [f"{where}: variable 'mu' holds {mu.dtype} values; it must be real "
+                    f"numbers [1]"]
+        if set(mu.dims) != {"x1", "x2"}:
+            return [f"{where}: variable 'mu' has dimensions {tuple(mu.dims)}, expected "
+                    f"('x1', 'x2')"]
+        values = np.asarray(mu.values, dtype=float)
+        bad = int(np.count_nonzero(~np.isfinite(values)))
+        if bad:
+            return [f"{where}: 'mu' holds NaN or inf at {bad} of {values.size} points; "
+                    f"every value must be finite"]
+        if values.min() < 0:
+            return [f"{where}: 'mu' is negative at {int(np.count_nonzero(values < 0))} of "
+                    f"{values.size} points (min {values.min():g}); mu must be >= 0"]
+        problems, ranges = _coordinate_problems(ds, where)
+    if problems or x1 is None or x2 is None:
+        return problems
+    for dim, x in (("x1", x1), ("x2", x2)):
+        lo, hi = ranges[dim]
+        x = np.asarray(x, dtype=float)
+        slack = 1e-9 * (hi - lo)
+        if x.min() < lo - slack or x.max() > hi + slack:
+            problems.append(f"{where}: does not cover the grid: the grid's {dim} runs from "
+                            f"{x.min():.6g} to {x.max():.6g} m, the file's from {lo:.6g} to "
+                            f"{hi:.6g} m; shrink grid.size or extend the file")
+    return problems
+
+
+def mu_on_grid(file, x1, x2) -> np.ndarray:
+    """The friction coefficient at the cell centres (N1, N2) [1].
+
+    Taken as it is where the file's coordinates are the grid's, else interpolated
+    linearly and clipped to the range of the file's values (a uniform map stays exact).
+
+    Raises
+    ------
+    SceneError
+        The file cannot serve the grid (:func:`check_mu_file`).
+    """
+    problems = check_mu_file(file, x1, x2)
+    if problems:
+        raise SceneError(problems)
+    x1 = np.asarray(x1, dtype=float)
+    x2 = np.asarray(x2, dtype=float)
+    with _open(os.fspath(file)) as ds:
+        mu = ds["mu"].load().transpose("x1", "x2").sortby(["x1", "x2"]).astype(float)
+    lo, hi = float(mu.min()), float(mu.max())
+    c1, c2 = np.asarray(mu.x1.values, float), np.asarray(mu.x2.values, float)
+    if c1.shape == x1.shape and c2.shape == x2.shape and np.array_equal(c1, x1) \
+            and np.array_equal(c2, x2):
+        return np.array(mu.values, dtype=float)
+    # clip into the file's range: check_mu_file allowed a rounding-size overshoot
+    x1c = np.clip(x1, c1[0], c1[-1])
+    x2c = np.clip(x2, c2[0], c2[-1])
+    out = np.asarray(mu.interp(x1=x1c, x2=x2c, method="linear").values, dtype=float)
+    return np.clip(out, lo, hi)
+
+
+def largest(file) -> float:
+    """The largest value of a (checked) friction-map file [1]."""
+    with _open(os.fspath(file)) as ds:
+        return float(ds["mu"].max())
