@@ -4,7 +4,6 @@ import math
 import pickle
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -14,10 +13,20 @@ from hypothesis import strategies as st
 
 from contactpipe import materials
 from contactpipe.exceptions import SceneError
-from contactpipe.scene import (BodySpec, Fretting, Friction, Geometry, Grid, Load, Output,
-                               Scene, Solver, TimeMesh)
+from contactpipe.files import loads_toml
+from contactpipe.scene import (
+    BodySpec,
+    Fretting,
+    Friction,
+    Geometry,
+    Grid,
+    Load,
+    Output,
+    Scene,
+    Solver,
+    TimeMesh,
+)
 from contactpipe.scene_parts import knot_steps
-
 from contactpipe.testing import TINY_SCENES
 
 REPO = Path(__file__).resolve().parents[1]
@@ -37,7 +46,7 @@ def write(tmp_path, text, name="scene.toml"):
 
 
 def fretting_dict():
-    return tomllib.loads(TINY_FRETTING)
+    return loads_toml(TINY_FRETTING)
 
 
 def assert_plain(obj, where="scene"):
@@ -62,12 +71,12 @@ def test_toml_round_trip(tmp_path, name):
     text = s.to_toml()
     assert Scene.from_toml_text(text) == s
     assert Scene.from_toml(write(tmp_path, text, "again.toml")) == s
-    assert tomllib.loads(text) == s.to_dict()
+    assert loads_toml(text) == s.to_dict()
 
 
 @pytest.mark.parametrize("name", sorted(EXAMPLES))
 def test_dict_round_trip(name):
-    s = Scene.from_dict(tomllib.loads(EXAMPLES[name]))
+    s = Scene.from_dict(loads_toml(EXAMPLES[name]))
     d = s.to_dict()
     assert_plain(d)
     assert Scene.from_dict(d) == s
@@ -76,14 +85,14 @@ def test_dict_round_trip(name):
 
 
 def test_to_dict_is_complete_with_defaults_resolved():
-    d = Scene.from_dict(tomllib.loads(TINY_CREEP)).to_dict()
+    d = Scene.from_dict(loads_toml(TINY_CREEP)).to_dict()
     assert d["solver"] == {"tolerance": 1e-9, "max_iterations": 2000, "time_rule": "auto",
                            "tangential": "auto", "max_coupling_passes": 100,
                            "preload_substeps": 8, "fft": "auto", "threads": 1}
     assert d["output"] == {"stride": 1, "precision": "float64", "compress": True}
     assert d["load"]["preload"] == "frictional"
     assert d["halfspace"]["young"] == 105e9 and isinstance(d["halfspace"]["young"], float)
-    raw = tomllib.loads(TINY_CREEP)
+    raw = loads_toml(TINY_CREEP)
     del raw["time"], raw["friction"]
     d2 = Scene.from_dict(raw).to_dict()
     assert d2["time"] == {"steps": 1}  # one step per knot interval
@@ -154,8 +163,8 @@ def test_digest_counts_physics_not_output():
 
 
 def test_digest_is_stable_across_processes():
-    code = ("import tomllib, sys; from contactpipe.scene import Scene; "
-            "print(Scene.from_dict(tomllib.loads(sys.stdin.read())).digest())")
+    code = ("import sys; from contactpipe.files import loads_toml; from contactpipe.scene import Scene; "
+            "print(Scene.from_dict(loads_toml(sys.stdin.read())).digest())")
     out = subprocess.run([sys.executable, "-c", code], input=TINY_FRETTING, text=True,
                          capture_output=True, cwd=REPO, check=True,
                          env={"PYTHONHASHSEED": "123", "PATH": ""})
@@ -218,7 +227,7 @@ def test_replace_into_the_fretting_preset_and_back():
 # ----------------------------------------------------------------------------- load program
 
 def test_instants_of_tiny_creep():
-    s = Scene.from_dict(tomllib.loads(TINY_CREEP))
+    s = Scene.from_dict(loads_toml(TINY_CREEP))
     t, W, T1, T2 = s.instants()
     np.testing.assert_allclose(t, np.linspace(0.0, 1.0, 11))
     assert t[0] == 0.0 and t[-1] == 1.0
@@ -286,7 +295,7 @@ def test_fretting_preset_cycles_and_direction():
 
 
 def test_single_knot_load_has_one_instant():
-    d = tomllib.loads(TINY_CREEP)
+    d = loads_toml(TINY_CREEP)
     d["load"]["time"] = [0.0]
     del d["time"]
     s = Scene.from_dict(d)
@@ -361,7 +370,7 @@ def test_hertz_semi_axes_is_the_hertz_contact_radius():
     the window's largest creep factor for a Maxwell body (phi = 2 at t = t'), phi(0) = 1
     with moduli="instantaneous"."""
     from contactpipe import analytic
-    s = Scene.from_dict(tomllib.loads(TINY_CREEP))
+    s = Scene.from_dict(loads_toml(TINY_CREEP))
     e_star = 105e9 / (1 - 0.3**2)
     glassy = analytic.hertz_sphere(1000.0, 0.018, e_star).contact_radius
     relaxed = analytic.hertz_sphere(1000.0, 0.018, e_star / 2).contact_radius
@@ -379,7 +388,7 @@ EXTREMES = [5e-324, 1e-300, 1e-30, 1e-3, 1.0, 1e30, 1e300, 1.7976931348623157e30
 @st.composite
 def extreme_scenes(draw):
     x = st.sampled_from(EXTREMES)
-    d = tomllib.loads(TINY_CREEP)
+    d = loads_toml(TINY_CREEP)
     shape = draw(st.sampled_from(["sphere", "ellipsoid", "flat_punch"]))
     d["geometry"] = ({"shape": shape, "radii": [draw(x), draw(x)]} if shape == "ellipsoid"
                      else {"shape": shape, "radius": draw(x)})
@@ -460,7 +469,7 @@ def test_rigid_and_elastic_bodies():
 # ----------------------------------------------------------------------------- auto grid
 
 def test_auto_grid_size_sphere_on_maxwell():
-    s = Scene.from_dict(tomllib.loads(TINY_CREEP)).replace({"grid.size": "auto"})
+    s = Scene.from_dict(loads_toml(TINY_CREEP)).replace({"grid.size": "auto"})
     assert s.grid.size == "auto"
     E, nu, R, W, phi_max = 105e9, 0.3, 0.018, 1000.0, 2.0  # phi = 1 + t/t' up to t = 1 s
     e_star = E / (1 - nu**2)
@@ -475,11 +484,11 @@ def test_auto_grid_size_sphere_on_maxwell():
     with pytest.raises(SceneError, match=r"grid\.size is 'auto'"):
         s.grid.coordinates()
     # a given size is the size used
-    assert Scene.from_dict(tomllib.loads(TINY_CREEP)).resolved_grid_size() == (2.4e-3, 2.4e-3)
+    assert Scene.from_dict(loads_toml(TINY_CREEP)).resolved_grid_size() == (2.4e-3, 2.4e-3)
 
 
 def test_auto_grid_size_two_compliant_bodies_and_other_shapes():
-    s = Scene.from_dict(tomllib.loads(TINY_CREEP)).replace({
+    s = Scene.from_dict(loads_toml(TINY_CREEP)).replace({
         "grid.size": "auto", "indenter": {"material": "elastic", "young": 210e9,
                                           "poisson": 0.25}})
     e_star = 1 / (2 * (1 - 0.3**2) / 105e9 + (1 - 0.25**2) / 210e9)

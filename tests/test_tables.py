@@ -7,7 +7,6 @@ import math
 import pathlib
 import re
 import tempfile
-import tomllib
 
 import numpy as np
 import pytest
@@ -17,6 +16,7 @@ from hypothesis import strategies as st
 
 from contactpipe import scene_parts
 from contactpipe.exceptions import SceneError
+from contactpipe.files import loads_toml
 from contactpipe.pipeline import config
 from contactpipe.scene import FIELDS as SCENE_FIELDS
 from contactpipe.scene import Scene
@@ -124,7 +124,7 @@ def test_each_part_describes_exactly_its_fields(part):
 
 # ----------------------------------------------------------------------------- every table
 
-BASE = tomllib.loads(TINY_SCENES["fretting"])
+BASE = loads_toml(TINY_SCENES["fretting"])
 PRESET = copy.deepcopy(BASE)
 del PRESET["load"]["time"], PRESET["load"]["tangential_force"]
 PRESET["load"]["fretting"] = {"amplitude": 90.0, "window": 1.0}
