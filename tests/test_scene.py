@@ -14,18 +14,8 @@ from hypothesis import strategies as st
 from contactpipe import materials
 from contactpipe.exceptions import SceneError
 from contactpipe.files import loads_toml
-from contactpipe.scene import (
-    BodySpec,
-    Fretting,
-    Friction,
-    Geometry,
-    Grid,
-    Load,
-    Output,
-    Scene,
-    Solver,
-    TimeMesh,
-)
+from contactpipe.scene import (BodySpec, Fretting, Friction, Geometry, Grid, Load, Output,
+                               Scene, Solver, TimeMesh)
 from contactpipe.scene_parts import knot_steps
 from contactpipe.testing import TINY_SCENES
 
