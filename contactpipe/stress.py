@@ -87,7 +87,8 @@ def body_poisson(ds: xr.Dataset, body: str = "halfspace") -> float:
     ArchiveError
         No ``scene`` attribute, or one that does not give the body's material.
     ValueError
-        ``body`` is not one of :data:`BODIES`, or that body is rigid.
+        ``body`` is not one of :data:`BODIES`, that body is rigid, or its Poisson ratio
+        varies in time (``bulk = "elastic"``).
     """
     if body not in BODIES:
         raise ValueError(f"body = {body!r}: allowed {', '.join(map(repr, BODIES))}")
@@ -104,6 +105,11 @@ def body_poisson(ds: xr.Dataset, body: str = "halfspace") -> float:
     if material == "rigid":
         raise ValueError(f"body = {body!r} is rigid in the archive's scene: a rigid body "
                          "has no elastic stress field; choose the other body")
+    if table.get("bulk") == "elastic":
+        raise ValueError(f"body = {body!r} has bulk = 'elastic' in the archive's scene: its "
+                         "Poisson ratio varies in time, so the stress from its tractions "
+                         "carries a memory this stage does not model; pass poisson= to "
+                         "evaluate the elastic field of one fixed ratio")
     nu = table.get("poisson")
     if material not in ("elastic", "viscoelastic") or not isinstance(nu, (int, float)):
         raise ArchiveError(f"the archive's scene gives no material and poisson for "

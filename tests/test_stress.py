@@ -520,6 +520,19 @@ def test_bad_requests(tiny, kwargs, exc, match):
         subsurface_stress(ds, **args)
 
 
+def test_varying_poisson_ratio_is_refused(tiny):
+    """A body with bulk = 'elastic' (nu varies in time) is refused unless poisson= is given."""
+    ds = cp.open_archive(tiny).load()
+    scene = cp.Scene.from_toml_text(ds.attrs["scene"])
+    varying = scene.replace({"halfspace": {"material": "viscoelastic", "young": 210e9,
+                                           "poisson": 0.3, "creep": "maxwell",
+                                           "relaxation_time": 1.0, "bulk": "elastic"}})
+    ds.attrs["scene"] = varying.to_toml()
+    with pytest.raises(ValueError, match=r"bulk = 'elastic'.*pass poisson="):
+        subsurface_stress(ds, [0.0])
+    assert subsurface_stress(ds, [0.0], poisson=0.3)["s33"].shape[1] == 1
+
+
 def test_archive_without_pressure_or_scene(tiny):
     ds = cp.open_archive(tiny).load()
     with pytest.raises(cp.ArchiveError, match=r"has no contact pressure 'p'"):
