@@ -17,6 +17,7 @@ import os
 import numpy as np
 
 from .exceptions import SceneError
+from .gridded import coordinate_problems, coverage_problems
 
 __all__ = ["check_mu_file", "mu_on_grid", "largest", "WHERE"]
 
@@ -28,22 +29,6 @@ def _open(path):
     import xarray as xr  # lazily: the numerical core does not need xarray
 
     return xr.open_dataset(path)
-
-
-def _coordinate_problems(ds, where):
-    """(problems, {dim: (min, max)}) of the file's coordinates."""
-    problems, ranges = [], {}
-    for dim in ("x1", "x2"):
-        if dim not in ds.coords:
-            problems.append(f"{where}: dimension {dim!r} has no coordinate [m]")
-            continue
-        c = np.asarray(ds[dim].values, dtype=float)
-        if c.size < 2 or not np.all(np.isfinite(c)) or np.unique(c).size != c.size:
-            problems.append(f"{where}: coordinate {dim!r} must hold at least 2 distinct "
-                            f"finite values [m], got {c.size} value(s)")
-            continue
-        ranges[dim] = (float(c.min()), float(c.max()))
-    return problems, ranges
 
 
 def check_mu_file(file, x1=None, x2=None) -> list:
@@ -91,18 +76,10 @@ def check_mu_file(file, x1=None, x2=None) -> list:
         if values.min() < 0:
             return [f"{where}: 'mu' is negative at {int(np.count_nonzero(values < 0))} of "
                     f"{values.size} points (min {values.min():g}); mu must be >= 0"]
-        problems, ranges = _coordinate_problems(ds, where)
+        problems, ranges = coordinate_problems(ds, where)
     if problems or x1 is None or x2 is None:
         return problems
-    for dim, x in (("x1", x1), ("x2", x2)):
-        lo, hi = ranges[dim]
-        x = np.asarray(x, dtype=float)
-        slack = 1e-9 * (hi - lo)
-        if x.min() < lo - slack or x.max() > hi + slack:
-            problems.append(f"{where}: does not cover the grid: the grid's {dim} runs from "
-                            f"{x.min():.6g} to {x.max():.6g} m, the file's from {lo:.6g} to "
-                            f"{hi:.6g} m; shrink grid.size or extend the file")
-    return problems
+    return coverage_problems(ranges, x1, x2, where)
 
 
 def mu_on_grid(file, x1, x2) -> np.ndarray:

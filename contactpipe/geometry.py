@@ -21,6 +21,7 @@ import os
 import numpy as np
 
 from .exceptions import SceneError
+from .gridded import coordinate_problems, coverage_problems
 
 __all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface"]
 
@@ -200,30 +201,10 @@ def check_surface(file, x1=None, x2=None) -> list:
         units = str(gap.attrs.get("units", "m")).strip()
         if units not in _METRE:
             return [f"{where}: variable 'gap' has units {units!r}, expected 'm'"]
-        problems = []
-        ranges = {}
-        for dim in ("x1", "x2"):
-            if dim not in ds.coords:
-                problems.append(f"{where}: dimension {dim!r} has no coordinate [m]")
-                continue
-            c = np.asarray(ds[dim].values, dtype=float)
-            if c.size < 2 or not np.all(np.isfinite(c)) or np.unique(c).size != c.size:
-                problems.append(f"{where}: coordinate {dim!r} must hold at least 2 distinct "
-                                f"finite values [m], got {c.size} value(s)")
-                continue
-            ranges[dim] = (float(c.min()), float(c.max()))
+        problems, ranges = coordinate_problems(ds, where)
         if problems or not grid:
             return problems
-        for dim, x in (("x1", x1), ("x2", x2)):
-            lo, hi = ranges[dim]
-            x = np.asarray(x, dtype=float)
-            slack = 1e-9 * (hi - lo)
-            if x.min() < lo - slack or x.max() > hi + slack:
-                problems.append(
-                    f"{where}: the grid's {dim} from {x.min():.6g} to {x.max():.6g} m lies "
-                    f"outside the file's {dim} from {lo:.6g} to {hi:.6g} m; shrink grid.size "
-                    f"or extend the file")
-        return problems
+        return coverage_problems(ranges, x1, x2, where)
 
 
 def surface_gap(x1, x2, file):

@@ -358,8 +358,8 @@ def test_surface_netcdf_must_cover_the_grid(tmp_path):
     x = np.linspace(-5e-4, 5e-4, 5)
     xr.Dataset({"gap": (("x1", "x2"), np.zeros((5, 5)))},
                coords={"x1": x, "x2": x}).to_netcdf(tmp_path / "s.nc")
-    with pytest.raises(SceneError, match=r"geometry\.file '.*s\.nc': the grid's x1 .* lies "
-                                         r"outside the file's x1"):
+    with pytest.raises(SceneError, match=r"geometry\.file '.*s\.nc': does not cover the "
+                                         r"grid: the grid's x1 .* outside the file's x1"):
         scene_with({"geometry": {"shape": "surface", "file": str(tmp_path / "s.nc")}})
 
 

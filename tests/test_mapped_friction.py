@@ -116,8 +116,8 @@ def test_relative_path_and_digest(tmp_path):
     ("nan", r"'mu' holds NaN or inf at 1 of 1024 points; every value must be finite"),
     ("negative", r"'mu' is negative at 1 of 1024 points \(min -0\.1\); mu must be >= 0"),
     ("small", r"does not cover the grid: the grid's x1 runs from -0\.000710\d* to "
-              r"0\.000710\d* m, the file's from -0\.0005 to 0\.0005 m; shrink grid\.size or "
-              r"extend the file$"),
+              r"0\.000710\d* m, outside the file's x1 from -0\.0005 to 0\.0005 m; shrink "
+              r"grid\.size or extend the file$"),
     ("no variable", r"no variable 'mu' \(found: friction\)"),
     ("missing", r"no such file"),
 ])

@@ -1,0 +1,49 @@
+"""Fields over the contact grid read from netCDF files: their coordinates and coverage.
+
+A surface gap (``geometry.file``) and a friction map (``friction.mu``) are both a variable
+over dimensions ``x1``, ``x2`` with coordinates in metres, any order, that must cover the
+scene's grid. :func:`coordinate_problems` checks the coordinates and
+:func:`coverage_problems` the grid, with one wording for both callers.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["coordinate_problems", "coverage_problems"]
+
+
+def coordinate_problems(ds, where: str):
+    """(problems, {dim: (min, max)}) of a dataset's ``x1``, ``x2`` coordinates [m].
+
+    Each coordinate must exist and hold at least two distinct finite values; ``where``
+    starts every message (the key and the file).
+    """
+    problems, ranges = [], {}
+    for dim in ("x1", "x2"):
+        if dim not in ds.coords:
+            problems.append(f"{where}: dimension {dim!r} has no coordinate [m]")
+            continue
+        c = np.asarray(ds[dim].values, dtype=float)
+        if c.size < 2 or not np.all(np.isfinite(c)) or np.unique(c).size != c.size:
+            problems.append(f"{where}: coordinate {dim!r} must hold at least 2 distinct "
+                            f"finite values [m], got {c.size} value(s)")
+            continue
+        ranges[dim] = (float(c.min()), float(c.max()))
+    return problems, ranges
+
+
+def coverage_problems(ranges: dict, x1, x2, where: str) -> list:
+    """Problems where the cell centres ``x1``, ``x2`` [m] leave the file's coordinate
+    ``ranges`` (from :func:`coordinate_problems`), beyond a rounding slack of 1e-9 of the
+    range."""
+    problems = []
+    for dim, x in (("x1", x1), ("x2", x2)):
+        lo, hi = ranges[dim]
+        x = np.asarray(x, dtype=float)
+        slack = 1e-9 * (hi - lo)
+        if x.min() < lo - slack or x.max() > hi + slack:
+            problems.append(f"{where}: does not cover the grid: the grid's {dim} runs from "
+                            f"{x.min():.6g} to {x.max():.6g} m, outside the file's {dim} "
+                            f"from {lo:.6g} to {hi:.6g} m; shrink grid.size or extend the "
+                            f"file")
+    return problems
