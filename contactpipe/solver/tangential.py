@@ -148,6 +148,13 @@ def _restore_vector(q, rho, con, stick):
     return q
 
 
+#: A warm start's cell within SNAP x tol (relative) of its bound starts on it [1].
+SNAP = 0.1
+
+#: The circle corrections a vector CG may leave out of A q, summed, as a fraction of
+#: its tolerance (A q is recomputed once they would exceed it, and at the end) [1].
+LAG = 0.1
+
 #: Iterations of the vector CG without halving its best step before it hands over to
 #: the projected gradient (it stalls where nearly every cell turns on its circle) [1].
 STALL = 50
@@ -182,7 +189,10 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
     movable = rho > 0
     a_self = op.self_influence("11")
     q, _ = disk_project(np.where(movable, q0, 0.0), rho)
-    q = _restore_vector(q, rho, con, movable & (np.hypot(q[0], q[1]) < rho))
+    mag = np.hypot(q[0], q[1])
+    near = movable & (mag >= rho * (1.0 - SNAP * tol)) & (mag > 0)
+    q[:, near] *= rho[near] / mag[near]
+    q = _restore_vector(q, rho, con, movable & ~near)
     Aq = op.tangential_vector(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
     scale = max(float(rho.sum()), 1e-300)
     t = np.zeros_like(q)
@@ -191,6 +201,7 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
     err = np.inf
     lam = np.zeros(con.m)
     best, best_it = np.inf, 0
+    lag = 0.0                   # corrections not yet in A q, summed, over scale [1]
     it = 0
     for it in range(1, max_iter + 1):
         if it - best_it > STALL:    # no progress: leave it to the projected gradient
@@ -247,11 +258,20 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
         over = movable & (m > rho)
         fix = over | (turning & (m > 0))
         if fix.any():
+            stepped = q_new.copy()
             q_new[:, fix] *= rho[fix] / m[fix]
             q_new = _restore_vector(q_new, rho, con, stick & ~over)
             err = np.abs(q_new - q).sum() / scale
             q = q_new
-            Aq = op.tangential_vector(q)
+            # the correction back onto the circles is second order in the step: while
+            # the corrections summed stay below LAG x tol, A q follows the step alone
+            lag_step = float(np.abs(q - stepped).sum()) / scale
+            if not (over & ~turning).any() and lag + lag_step <= LAG * tol:
+                lag += lag_step
+                Aq = Aq - tau * r
+            else:
+                lag = 0.0
+                Aq = op.tangential_vector(q)
         else:
             err = np.abs(q_new - q).sum() / scale
             q = q_new
@@ -263,6 +283,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
             break
         if err < 0.5 * best:
             best, best_it = err, it
+    if lag > 0.0:
+        Aq = op.tangential_vector(q)
     err = max(float(err), float(np.abs(con.residual(q)).max(initial=0.0)) / scale)
     ok = bool(err < tol) and bool(np.all(np.isfinite(q)))
     lam = multipliers(con, Aq + b, q, rho)
