@@ -160,6 +160,32 @@ LAG = 0.1
 STALL = 50
 
 
+def _vector_step(op, q, Aq, tau, t, r, rho, con, cells, scale, lag, tol):
+    """One step q - tau t of :func:`_vector_cg` (r = A t): stick cells pushed past their
+    disk are projected radially, turning cells put back on their circles, the rows
+    restored. Returns (q, A q, the step's size over ``scale``, the lag).
+
+    The correction back onto the circles is second order in the step: while the
+    corrections summed (``lag``, over ``scale``) stay below :data:`LAG` x ``tol``, A q
+    follows the step alone; beyond that, or when a stick cell left its disk, A q is
+    recomputed (two FFT pairs) and the lag is cleared."""
+    movable, stick, turning = cells
+    q_new = q - tau * t
+    m = np.hypot(q_new[0], q_new[1])
+    over = movable & (m > rho)
+    fix = over | (turning & (m > 0))
+    if not fix.any():
+        return q_new, Aq - tau * r, np.abs(q_new - q).sum() / scale, lag
+    stepped = q_new.copy()
+    q_new[:, fix] *= rho[fix] / m[fix]
+    q_new = _restore_vector(q_new, rho, con, stick & ~over)
+    err = np.abs(q_new - q).sum() / scale
+    lag_step = float(np.abs(q_new - stepped).sum()) / scale
+    if not (over & ~turning).any() and lag + lag_step <= LAG * tol:
+        return q_new, Aq - tau * r, err, lag + lag_step
+    return q_new, op.tangential_vector(q_new), err, 0.0
+
+
 def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
     """Full vector form by projected CG (the fast path of :func:`solve_vector`; ``con``
     the rows, :class:`~contactpipe.solver.cg.Constraints` on (2, N1, N2)).
@@ -181,9 +207,12 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
       (they join the slip set) and turning cells are put back on their circles; the rows
       are restored by projecting the stick cells (:func:`_restore_vector`).
 
-    Each iteration costs one operator application (two FFT pairs) and a second one when
-    a projection changed the iterate. It stops, not converged, when :data:`STALL`
-    iterations pass without halving its best step.
+    Each iteration costs one operator application (two FFT pairs), and a second one only
+    when a stick cell left its disk or the circle corrections add up (:func:`_vector_step`).
+    A warm start's cells within :data:`SNAP` x tol of their bound start on it (else a
+    bound raised by rounding turns slip cells into stick cells, which slide back in tens
+    of iterations). It stops, not converged, when :data:`STALL` iterations pass without
+    halving its best step.
     """
     rho = bound
     movable = rho > 0
@@ -253,29 +282,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
             if tau * spin_max > 0.5:
                 tau = 0.5 / spin_max
                 sets_old = None
-        q_new = q - tau * t
-        m = np.hypot(q_new[0], q_new[1])
-        over = movable & (m > rho)
-        fix = over | (turning & (m > 0))
-        if fix.any():
-            stepped = q_new.copy()
-            q_new[:, fix] *= rho[fix] / m[fix]
-            q_new = _restore_vector(q_new, rho, con, stick & ~over)
-            err = np.abs(q_new - q).sum() / scale
-            q = q_new
-            # the correction back onto the circles is second order in the step: while
-            # the corrections summed stay below LAG x tol, A q follows the step alone
-            lag_step = float(np.abs(q - stepped).sum()) / scale
-            if not (over & ~turning).any() and lag + lag_step <= LAG * tol:
-                lag += lag_step
-                Aq = Aq - tau * r
-            else:
-                lag = 0.0
-                Aq = op.tangential_vector(q)
-        else:
-            err = np.abs(q_new - q).sum() / scale
-            q = q_new
-            Aq = Aq - tau * r
+        q, Aq, err, lag = _vector_step(op, q, Aq, tau, t, r, rho, con,
+                                       (movable, stick, turning), scale, lag, tol)
         if not err >= 0.0:      # NaN: the iterate is lost
             err = np.inf
             break
