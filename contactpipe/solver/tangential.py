@@ -148,9 +148,42 @@ def _restore_vector(q, rho, con, stick):
     return q
 
 
+#: A warm start's cell within SNAP x tol (relative) of its bound starts on it [1].
+SNAP = 0.1
+
+#: The circle corrections a vector CG may leave out of A q, summed, as a fraction of
+#: its tolerance (A q is recomputed once they would exceed it, and at the end) [1].
+LAG = 0.1
+
 #: Iterations of the vector CG without halving its best step before it hands over to
 #: the projected gradient (it stalls where nearly every cell turns on its circle) [1].
 STALL = 50
+
+
+def _vector_step(op, q, Aq, tau, t, r, rho, con, cells, scale, lag, tol):
+    """One step q - tau t of :func:`_vector_cg` (r = A t): stick cells pushed past their
+    disk are projected radially, turning cells put back on their circles, the rows
+    restored. Returns (q, A q, the step's size over ``scale``, the lag).
+
+    The correction back onto the circles is second order in the step: while the
+    corrections summed (``lag``, over ``scale``) stay below :data:`LAG` x ``tol``, A q
+    follows the step alone; beyond that, or when a stick cell left its disk, A q is
+    recomputed (two FFT pairs) and the lag is cleared."""
+    movable, stick, turning = cells
+    q_new = q - tau * t
+    m = np.hypot(q_new[0], q_new[1])
+    over = movable & (m > rho)
+    fix = over | (turning & (m > 0))
+    if not fix.any():
+        return q_new, Aq - tau * r, np.abs(q_new - q).sum() / scale, lag
+    stepped = q_new.copy()
+    q_new[:, fix] *= rho[fix] / m[fix]
+    q_new = _restore_vector(q_new, rho, con, stick & ~over)
+    err = np.abs(q_new - q).sum() / scale
+    lag_step = float(np.abs(q_new - stepped).sum()) / scale
+    if not (over & ~turning).any() and lag + lag_step <= LAG * tol:
+        return q_new, Aq - tau * r, err, lag + lag_step
+    return q_new, op.tangential_vector(q_new), err, 0.0
 
 
 def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
@@ -174,15 +207,21 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
       (they join the slip set) and turning cells are put back on their circles; the rows
       are restored by projecting the stick cells (:func:`_restore_vector`).
 
-    Each iteration costs one operator application (two FFT pairs) and a second one when
-    a projection changed the iterate. It stops, not converged, when :data:`STALL`
-    iterations pass without halving its best step.
+    Each iteration costs one operator application (two FFT pairs), and a second one only
+    when a stick cell left its disk or the circle corrections add up (:func:`_vector_step`).
+    A warm start's cells within :data:`SNAP` x tol of their bound start on it (else a
+    bound raised by rounding turns slip cells into stick cells, which slide back in tens
+    of iterations). It stops, not converged, when :data:`STALL` iterations pass without
+    halving its best step.
     """
     rho = bound
     movable = rho > 0
     a_self = op.self_influence("11")
     q, _ = disk_project(np.where(movable, q0, 0.0), rho)
-    q = _restore_vector(q, rho, con, movable & (np.hypot(q[0], q[1]) < rho))
+    mag = np.hypot(q[0], q[1])
+    near = movable & (mag >= rho * (1.0 - SNAP * tol)) & (mag > 0)
+    q[:, near] *= rho[near] / mag[near]
+    q = _restore_vector(q, rho, con, movable & ~near)
     Aq = op.tangential_vector(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
     scale = max(float(rho.sum()), 1e-300)
     t = np.zeros_like(q)
@@ -191,6 +230,7 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
     err = np.inf
     lam = np.zeros(con.m)
     best, best_it = np.inf, 0
+    lag = 0.0                   # corrections not yet in A q, summed, over scale [1]
     it = 0
     for it in range(1, max_iter + 1):
         if it - best_it > STALL:    # no progress: leave it to the projected gradient
@@ -242,20 +282,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
             if tau * spin_max > 0.5:
                 tau = 0.5 / spin_max
                 sets_old = None
-        q_new = q - tau * t
-        m = np.hypot(q_new[0], q_new[1])
-        over = movable & (m > rho)
-        fix = over | (turning & (m > 0))
-        if fix.any():
-            q_new[:, fix] *= rho[fix] / m[fix]
-            q_new = _restore_vector(q_new, rho, con, stick & ~over)
-            err = np.abs(q_new - q).sum() / scale
-            q = q_new
-            Aq = op.tangential_vector(q)
-        else:
-            err = np.abs(q_new - q).sum() / scale
-            q = q_new
-            Aq = Aq - tau * r
+        q, Aq, err, lag = _vector_step(op, q, Aq, tau, t, r, rho, con,
+                                       (movable, stick, turning), scale, lag, tol)
         if not err >= 0.0:      # NaN: the iterate is lost
             err = np.inf
             break
@@ -263,6 +291,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None):
             break
         if err < 0.5 * best:
             best, best_it = err, it
+    if lag > 0.0:
+        Aq = op.tangential_vector(q)
     err = max(float(err), float(np.abs(con.residual(q)).max(initial=0.0)) / scale)
     ok = bool(err < tol) and bool(np.all(np.isfinite(q)))
     lam = multipliers(con, Aq + b, q, rho)
