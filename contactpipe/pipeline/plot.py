@@ -337,7 +337,7 @@ def _draw_closed_form(sol, k, xf, x2_row, scale, ax_p, ax_q):
             pc = sol.pressure(k, xf, x2_row) / scale[0]
             pc = np.where(np.isfinite(pc), pc, np.nan)
             ax_p.plot(xf / scale[1], pc, "-", color=GREY, lw=1.0, zorder=0)
-        if ax_q is not None:
+        if ax_q is not None and sol.has_field_shear():
             ax_q.plot(xf / scale[1], sol.shear(k, xf, x2_row) / scale[0], "-", color=GREY,
                       lw=1.0, zorder=0)
 
