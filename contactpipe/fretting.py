@@ -53,6 +53,7 @@ from .scene import Scene
 
 __all__ = ["REGIMES", "A_TRANSITION", "Cycle", "FrettingRegime", "turning_points",
            "loop_cycles", "loop_energy", "cycle_of", "regime_of", "closed_form_boundary",
+           "boundary_constants",
            "classify_loop", "fretting_regime"]
 
 #: The regimes, from the smallest displacement amplitude to the largest.
@@ -161,6 +162,19 @@ def regime_of(regimes) -> str:
     return found.pop() if len(found) == 1 else "mixed"
 
 
+def boundary_constants(scene: Scene):
+    """(R [m], E* [Pa], C [1/Pa]) of a sphere of elastic or rigid bodies: what
+    :func:`contactpipe.analytic.gross_slip_boundary` needs besides mu and W; None for
+    another geometry or a viscoelastic body."""
+    b1, b2 = scene.indenter.body(), scene.halfspace.body()
+    if scene.geometry.shape != "sphere" or any(b.kind not in ("rigid", "elastic")
+                                               for b in (b1, b2)):
+        return None
+    return (float(scene.geometry.radius), float(composite_modulus(b1, b2)),
+            float(analytic.tangential_compliance_sum(b1.young, b1.poisson, b2.young,
+                                                     b2.poisson)))
+
+
 def closed_form_boundary(scene: Scene) -> tuple[float, str]:
     """(delta_gs [m], "") of a scene's Mindlin contact, or (NaN, why not).
 
@@ -170,6 +184,7 @@ def closed_form_boundary(scene: Scene) -> tuple[float, str]:
     """
     b1, b2 = scene.indenter.body(), scene.halfspace.body()
     _, W, _, _ = scene.load.knots()
+    constants = boundary_constants(scene)
     why = []
     if scene.geometry.shape != "sphere":
         why.append(f"geometry.shape = {scene.geometry.shape!r} (needs a sphere)")
@@ -181,11 +196,7 @@ def closed_form_boundary(scene: Scene) -> tuple[float, str]:
         why.append("the normal force is not a constant force > 0")
     if why:
         return math.nan, "; ".join(why)
-    compliance = analytic.tangential_compliance_sum(b1.young, b1.poisson, b2.young,
-                                                    b2.poisson)
-    value = analytic.gross_slip_boundary(float(scene.friction.mu), float(W[0]),
-                                         scene.geometry.radius, composite_modulus(b1, b2),
-                                         compliance)
+    value = analytic.gross_slip_boundary(float(scene.friction.mu), float(W[0]), *constants)
     return float(value), ""
 
 
