@@ -58,7 +58,7 @@ def fretting_map(sweep_dir) -> xr.Dataset:
     -------
     xarray.Dataset
         Over the dimension ``member`` (in sweep order): one coordinate per sweep axis
-        (named as the axis), the variables of :data:`COLUMNS`, ``regime`` and
+        (``axis_<name>``, e.g. ``axis_friction.mu``, the member's value), the variables of :data:`COLUMNS`, ``regime`` and
         ``regime_closed_form`` (strings; "" where no closed form applies) and ``file``.
         Attributes: ``sweep_axes`` (JSON), ``members_not_done``, and where every member
         shares them the boundary's constants ``radius_m``, ``composite_modulus_Pa``,
@@ -115,7 +115,7 @@ def fretting_map(sweep_dir) -> xr.Dataset:
     data["file"] = ("member", np.array([m["file"] for m, _ in rows], dtype=object), {})
     coords = {"member": ("member", np.array([m["index"] for m, _ in rows]))}
     for n in names:
-        coords[n] = ("member", np.array([coord_value(m["values"][n]) for m, _ in rows]),
+        coords[f"axis_{n}"] = ("member", np.array([coord_value(m["values"][n]) for m, _ in rows]),
                      {"long_name": f"sweep axis {n}"})
     table = xr.Dataset(data, coords=coords)
     table.attrs = {"title": "contactpipe fretting map: the regime of each sweep member",
