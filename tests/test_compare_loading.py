@@ -62,7 +62,7 @@ def test_the_loading_scenes_are_recognised():
 
 def test_why_not_names_the_loading_forms():
     """A torsion under moment control has no closed form; the reasons name each loading
-    candidate and what it needs."""
+    candidate and what it needs. A frictionless twist is plain Hertz."""
     scene = make_scene(friction={"mu": MU},
                        load={"time": [0.0, 1.0], "normal_force": W, "moment3": [0.0, 0.01]})
     name, why = diagnose(scene)
@@ -70,7 +70,11 @@ def test_why_not_names_the_loading_forms():
     assert "needs a twist under rotation control (load.rotation3)" in why["lubkin_torsion"]
     assert "needs load.tangential_displacement" in why["mindlin_displacement"]
     assert any("no twist" in m for m in why["hertz_tilted"])
-    assert any("no tilt or twist" in m for m in why["hertz"])
+    assert any("a twist" in m for m in why["hertz"])
+    assert "needs no tilt or twist" in why["mindlin_deresiewicz"]
+    # without friction a twist carries nothing: the plain Hertz contact
+    assert closed_form_for(make_scene(load={"time": [0.0, 1.0], "normal_force": W,
+                                            "rotation3": [0.0, 0.01]})) == "hertz"
 
 
 # --------------------------------------------------------------------------- tables

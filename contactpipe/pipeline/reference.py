@@ -124,8 +124,8 @@ def diagnose(scene) -> tuple[str | None, dict]:
     shear_why = ("shear: friction.mu = {:g} with {}".format(
         mu, "a tangential load" if has_t else "a twist" if f["twist"]
         else "a coupled pair (Dundurs beta != 0)"))
-    plain = (not f["tilt"] and not f["twist"],
-             "needs no tilt or twist (moments and rotations absent or 0)")
+    plain = (not f["tilt"], "needs no tilt (moment1 / moment2, rotation1 / rotation2 "
+                            "absent or 0)")
     scalar_mu = (not mapped, "needs a scalar friction.mu (not a map)")
     why = {}
 
@@ -168,7 +168,8 @@ def diagnose(scene) -> tuple[str | None, dict]:
             (not np.any(np.nan_to_num(T2) != 0), "needs the tangential load along x1 (T2 = 0)"),
             (T1[0] == 0, f"needs the tangential load to start from 0, got "
                          f"{T1[0]:g} N at time[0]"),
-            (constant_w, "needs a constant load.normal_force"), plain]):
+            (constant_w, "needs a constant load.normal_force"),
+            (not f["tilt"] and not f["twist"], "needs no tilt or twist")]):
         return "mindlin_deresiewicz", why
     return _diagnose_loading(scene, f, need, why, sphere, elastic, mat, couples, mu,
                              scalar_mu, has_t, constant_w, shear_free, shear_why)
