@@ -63,7 +63,8 @@ def test_diagnose_says_why_each_closed_form_does_not_apply():
     scene = tiny_scene("fretting")
     name, why = diagnose(scene)
     assert name is None and set(why) == {"hertz", "flat_punch", "lee_radok",
-                                         "mindlin_deresiewicz"}
+                                         "mindlin_deresiewicz", "hertz_tilted",
+                                         "lubkin_torsion", "mindlin_displacement"}
     msg = no_closed_form_message(scene, why, "run.nc")
     assert msg.startswith("run.nc: no closed form applies to scene 'tiny-fretting'")
     assert "contactpipe compare ARCHIVE.nc REFERENCE.nc" in msg and "\n" not in msg

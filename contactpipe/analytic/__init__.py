@@ -19,11 +19,14 @@ Tangential contact (elastic, Hertzian normal pressure, no coupling: beta = 0)
 Displacement control and gross slip (a fretting rig)
     :func:`gross_slip_displacement`, :func:`mindlin_force` (first branch),
     :func:`displacement_loop_force` (any displacement history, with sliding),
-    :func:`displacement_energy_per_cycle` (E_MD(mu W) + 4 mu W (delta* - delta_gs)).
+    :func:`displacement_energy_per_cycle` (E_MD(mu W) + 4 mu W (delta* - delta_gs)),
+    :func:`gross_slip_boundary` (delta_gs(mu, W) of a sphere: the fretting map's boundary),
+    :func:`energy_ratio` (Fouvry's A = E/(4 T* delta*) against delta*/delta_gs).
 Moments
     :func:`hertz_tilted` (a Hertz contact under tilting moments: moved by M/W, phi = e/R);
     :func:`torsional_compliance`, :func:`torsional_stiffness`, :func:`full_slip_torque`,
-    :func:`lubkin_torsion`, :func:`lubkin_moment` (torsion of spheres in partial slip).
+    :func:`lubkin_torsion`, :func:`lubkin_moment` (torsion of spheres in partial slip),
+    :func:`torsion_loop_moment` (any twist history, Masing's rules on Lubkin's curve).
 Viscoelastic normal contact (rigid sphere, Lee-Radok)
     :func:`lee_radok_sphere`, :func:`lee_radok_radius`, :func:`relaxation_function`,
     :func:`lee_radok_pressure`.
@@ -55,11 +58,12 @@ from ._common import cell_average, composite_modulus, tangential_compliance_sum
 from .hertz import (FlatPunch, HertzEllipsoid, HertzSphere, TiltedHertz, flat_punch,
                     hertz_ellipsoid, hertz_sphere, hertz_tilted)
 from .mindlin import (CattaneoMindlin, cattaneo_mindlin, displacement_energy_per_cycle,
-                      displacement_loop_force, energy_per_cycle, gross_slip_displacement,
+                      ENERGY_RATIO_TRANSITION, displacement_loop_force, energy_per_cycle,
+                      energy_ratio, gross_slip_boundary, gross_slip_displacement,
                       masing_memory, mindlin_deresiewicz_traction, mindlin_force,
                       stick_radius, tangential_displacement)
-from .torsion import (full_slip_torque, lubkin_moment, lubkin_torsion, torsional_compliance,
-                      torsional_stiffness)
+from .torsion import (full_slip_torque, lubkin_moment, lubkin_torsion, torsion_loop_moment,
+                      torsional_compliance, torsional_stiffness)
 from .lee_radok import (LeeRadokContact, lee_radok_pressure, lee_radok_radius,
                         lee_radok_sphere, relaxation_function)
 
@@ -72,9 +76,10 @@ __all__ = [
     "masing_memory", "mindlin_deresiewicz_traction", "stick_radius",
     "tangential_displacement", "energy_per_cycle",
     "gross_slip_displacement", "mindlin_force", "displacement_loop_force",
-    "displacement_energy_per_cycle",
+    "displacement_energy_per_cycle", "gross_slip_boundary", "energy_ratio",
+    "ENERGY_RATIO_TRANSITION",
     "torsional_compliance", "torsional_stiffness", "full_slip_torque", "lubkin_torsion",
-    "lubkin_moment",
+    "lubkin_moment", "torsion_loop_moment",
     "LeeRadokContact", "lee_radok_sphere", "lee_radok_radius", "relaxation_function",
     "lee_radok_pressure",
     "cell_average",

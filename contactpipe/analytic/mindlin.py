@@ -11,13 +11,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scipy import special
+
 from ..exceptions import GrossSlidingError
 from ._common import sqrt_plus
+
+#: Fouvry's energy ratio A = E / (4 T* delta*) at the partial / gross slip transition of a
+#: sphere on a plane; :func:`energy_ratio` gives exactly this value at delta* = delta_gs.
+ENERGY_RATIO_TRANSITION = 0.2
 
 __all__ = ["CattaneoMindlin", "cattaneo_mindlin", "masing_memory",
            "mindlin_deresiewicz_traction", "stick_radius", "tangential_displacement",
            "energy_per_cycle", "gross_slip_displacement", "mindlin_force",
-           "displacement_loop_force", "displacement_energy_per_cycle"]
+           "displacement_loop_force", "displacement_energy_per_cycle", "gross_slip_boundary",
+           "energy_ratio", "ENERGY_RATIO_TRANSITION"]
 
 
 # --------------------------------------------------------------------------- Cattaneo
@@ -495,3 +502,109 @@ def displacement_energy_per_cycle(amplitude, friction_coefficient, normal_force,
                                 compliance_sum)
     return energy_per_cycle(mu_w, friction_coefficient, normal_force, contact_radius,
                             compliance_sum) + 4.0 * mu_w * (amplitude - d_gs)
+
+
+def gross_slip_boundary(friction_coefficient, normal_force, radius, composite_modulus,
+                        compliance_sum):
+    """The partial / gross slip boundary of a sphere on a plane: delta_gs(mu, W) [m].
+
+    :func:`gross_slip_displacement` with the Hertz contact radius of W,
+    ``a = (3 W R / (4 E*))^(1/3)`` ([J85]_ §4.2): ``delta_gs = 3 mu W C / (16 a)``, which for
+    identical bodies (C = 2 (2 - nu) / G) is ``3 mu W (2 - nu) / (8 G a)``. A fretting
+    loop of displacement amplitude delta* < delta_gs stays in partial slip, one beyond slides
+    as a whole on every stroke.
+
+    Parameters
+    ----------
+    friction_coefficient : float or array_like
+        mu [1], >= 0.
+    normal_force : float or array_like
+        W [N], > 0 (broadcast with ``friction_coefficient``).
+    radius : float
+        Relative radius of curvature R [m].
+    composite_modulus : float
+        E* [Pa] (:func:`composite_modulus`).
+    compliance_sum : float
+        C = (2 - nu1)/G1 + (2 - nu2)/G2 [1/Pa] (:func:`tangential_compliance_sum`).
+
+    Returns
+    -------
+    float or ndarray
+        delta_gs [m], the shape of mu and W broadcast.
+    """
+    mu, w = np.broadcast_arrays(np.asarray(friction_coefficient, float),
+                                np.asarray(normal_force, float))
+    if np.any(w <= 0) or np.any(mu < 0):
+        raise ValueError(f"gross_slip_boundary needs W > 0 [N] and mu >= 0, got W = "
+                         f"{normal_force!r}, mu = {friction_coefficient!r}")
+    a = (3.0 * w * float(radius) / (4.0 * float(composite_modulus))) ** (1.0 / 3.0)
+    out = 3.0 * mu * w * float(compliance_sum) / (16.0 * a)
+    return float(out) if out.ndim == 0 else out
+
+
+#: Below this force ratio tau = T*/(mu W) the bracket of E_MD is summed as a series.
+_SERIES_BELOW = 0.05
+_SERIES_TERMS = 40
+
+
+def _md_bracket(tau):
+    """1 - (1 - tau)^(5/3) - (5 tau/6)(1 + (1 - tau)^(2/3)) (:func:`energy_per_cycle`),
+    summed as its power series below tau = 0.05 (the closed form cancels to O(tau^3))."""
+    tau = np.asarray(tau, float)
+    s = np.clip(1.0 - tau, 0.0, 1.0)
+    out = 1.0 - s ** (5.0 / 3.0) - 5.0 * tau / 6.0 * (1.0 + s ** (2.0 / 3.0))
+    small = tau < _SERIES_BELOW
+    if np.any(small):
+        k = np.arange(3, _SERIES_TERMS + 3)
+        # coefficient of tau^k: -(-1)^k C(5/3, k) - (5/6)(-1)^(k-1) C(2/3, k-1); those of
+        # tau and tau^2 vanish exactly
+        coef = -(-1.0) ** k * special.binom(5.0 / 3.0, k) \
+            - 5.0 / 6.0 * (-1.0) ** (k - 1) * special.binom(2.0 / 3.0, k - 1)
+        t = tau[small][:, None]
+        out = np.where(small, 0.0, out)
+        out[small] = (coef[None, :] * t ** k[None, :]).sum(axis=1)
+    return out
+
+
+def energy_ratio(delta_ratio):
+    """Fouvry's energy ratio A = E / (4 T* delta*) of the Mindlin-Deresiewicz fretting loop.
+
+    Under displacement control at amplitude delta* = x delta_gs
+    (:func:`gross_slip_displacement`), with E the energy per cycle
+    (:func:`displacement_energy_per_cycle`) and T* the force amplitude:
+
+    * partial slip (x <= 1): T* = mu W tau, tau = 1 - (1 - x)^(3/2), and
+      ``A = (6/5) [1 - (1 - tau)^(5/3) - (5 tau/6)(1 + (1 - tau)^(2/3))] / (tau x)``
+      (A ~ x/12 for small x);
+    * gross slip (x > 1): T* = mu W and ``A = 1 - 0.8 / x``.
+
+    A grows from 0 to 1 and passes :data:`ENERGY_RATIO_TRANSITION` = 0.2 exactly at x = 1:
+    the transition value Fouvry et al. found for a sphere on a plane ([F95]_; E_MD(mu W) =
+    (4/5) mu W delta_gs). It depends on x alone: not on mu, W, the radius or the moduli.
+
+    Parameters
+    ----------
+    delta_ratio : float or array_like
+        x = delta*/delta_gs [1], >= 0.
+
+    Returns
+    -------
+    float or ndarray
+        A [1] (0 at x = 0).
+
+    References
+    ----------
+    .. [F95] S. Fouvry, Ph. Kapsa, L. Vincent, "Analysis of sliding behaviour for fretting
+       loadings: determination of transition criteria", Wear 185 (1995) 35-46.
+    """
+    x = np.asarray(delta_ratio, float)
+    if np.any(~np.isfinite(x)) or np.any(x < 0):
+        raise ValueError(f"delta_ratio must be finite and >= 0, got {delta_ratio!r}")
+    xp = np.clip(x, 0.0, 1.0)
+    tau = -np.expm1(1.5 * np.log1p(-np.minimum(xp, np.nextafter(1.0, 0.0))))    # 1 - (1 - x)^(3/2)
+    tau = np.where(xp >= 1.0, 1.0, tau)
+    partial = np.zeros(x.shape)
+    pos = x > 0
+    partial[pos] = 1.2 * _md_bracket(tau[pos]) / (tau[pos] * xp[pos])
+    out = np.where(x > 1.0, 1.0 - 0.8 / np.maximum(x, 1.0), partial)
+    return float(out) if out.ndim == 0 else out

@@ -30,6 +30,8 @@ References
 .. [L51] J. L. Lubkin, "The torsion of elastic spheres in contact", J. Appl. Mech. 18
    (1951) 183-187.
 .. [J85] K. L. Johnson, *Contact Mechanics*, Cambridge University Press, 1985, §7.4.
+.. [D54] H. Deresiewicz, "Contact of elastic spheres under an oscillating torsional
+   couple", J. Appl. Mech. 21 (1954) 52-56.
 """
 from __future__ import annotations
 
@@ -39,7 +41,7 @@ from scipy import integrate, optimize, special
 from ._common import check_positive
 
 __all__ = ["torsional_compliance", "torsional_stiffness", "full_slip_torque",
-           "lubkin_torsion", "lubkin_moment"]
+           "lubkin_torsion", "lubkin_moment", "torsion_loop_moment"]
 
 
 def torsional_compliance(young1, poisson1, young2, poisson2) -> float:
@@ -144,3 +146,56 @@ def lubkin_moment(twist, friction_coefficient, normal_force, contact_radius, com
         r = optimize.brentq(gap, lo, 1.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
         out.flat[i] = np.sign(b) * lubkin_torsion(r, mu, W, a, compliance)[1]
     return out.reshape(np.shape(twist)) if np.ndim(twist) else float(out[0])
+
+
+def torsion_loop_moment(history, friction_coefficient, normal_force, contact_radius,
+                        compliance):
+    """Torque M [N m] at every sample of a twist history (rotation control, from rest).
+
+    Masing's rules on Lubkin's virgin curve M_v = :func:`lubkin_moment` (Deresiewicz's
+    oscillating torsion, [D54]_, [J85]_ §7.4): from the last remembered reversal
+    (beta_r, M_r) the branch is ``M = M_r + s 2 M_v(|beta - beta_r| / 2)`` (s the
+    direction); a branch that reaches the one it left wipes both reversals, and one that
+    passes -beta_r after a single reversal rejoins the (odd) virgin curve. The stick zone
+    never vanishes at a finite twist, so the torque only tends to 3 pi mu W a / 16.
+
+    Parameters
+    ----------
+    history : array_like
+        beta [rad] samples, linear between samples, from rest at 0.
+    friction_coefficient, normal_force, contact_radius, compliance
+        mu [1], W [N], a [m], C = 1/G1 + 1/G2 [1/Pa].
+
+    Returns
+    -------
+    ndarray
+        M [N m] at each sample.
+    """
+    def virgin(b):
+        return float(lubkin_moment(b, friction_coefficient, normal_force, contact_radius,
+                                   compliance))
+
+    stack, M, prev, direction = [], 0.0, 0.0, 0
+    out = []
+    for b in np.atleast_1d(np.asarray(history, float)).ravel():
+        b = float(b)
+        if b != prev:
+            s = 1 if b > prev else -1
+            if direction and s != direction:
+                stack.append((prev, M))
+            direction = s
+            while True:
+                if len(stack) >= 2 and s * (b - stack[-2][0]) >= 0.0:
+                    del stack[-2:]
+                elif len(stack) == 1 and s * (b + stack[0][0]) >= 0.0:
+                    stack.pop()
+                else:
+                    break
+            if stack:
+                b_r, m_r = stack[-1]
+                M = m_r + s * 2.0 * virgin(abs(b - b_r) / 2.0)
+            else:
+                M = virgin(b)
+            prev = b
+        out.append(M)
+    return np.array(out)

@@ -41,7 +41,7 @@ from ..archive import open_archive
 from ..exceptions import ArchiveError
 from ..files import atomic_path, check_output_dir, check_output_path
 from .inputs import grid_of, radius_of_area, scene_of
-from .reference import closed_form_solution
+from .reference import LOADING_FORMS, closed_form_solution
 
 __all__ = ["compare", "load_dataset", "write_table", "format_table", "check_table_path",
            "TABLE_SUFFIXES"]
@@ -140,7 +140,8 @@ def _compare_closed_form(ds, label):
         cols["err_contact_radius"][k] = _rel(radius_of_area(area[k]), sol.contact_radius(k))
         cols["err_omega3"][k] = _rel(omega3[k], sol.approach(k))
         if sol.has_field_pressure():
-            if sol.name in ("hertz", "mindlin_deresiewicz", "flat_punch"):
+            if sol.name in ("hertz", "mindlin_deresiewicz", "flat_punch", "lubkin_torsion",
+                            "mindlin_displacement"):
                 if p_ref_static is None:            # constant W: the same at every instant
                     p_ref_static = sol.cell_pressure(0, x1, x2, d1, d2)
                 p_ref = p_ref_static
@@ -177,7 +178,11 @@ def _compare_closed_form(ds, label):
         d_ref = float(sol.dissipation()[-1])
         d_num = float(ds["dissipation"].values[-1])
         scalars["err_dissipation"] = _rel(d_num, d_ref)
+    attrs = {}
+    if sol.name in LOADING_FORMS:
+        attrs = _loading_errors(ds, sol, cols, scalars, cell, x1, x2)
     table = _table(ds, cols, scalars)
+    table.attrs.update(attrs)
     table.attrs["closed_form"] = sol.name
     table.attrs["reference"] = f"closed form: {sol.name}"
     radius = sol.contact_radius(nt - 1)
@@ -189,6 +194,93 @@ def _compare_closed_form(ds, label):
             "cell of the contact edge r = a, where q1 = mu p repeats the pressure error "
             "of the cells the edge cuts (err_p_max)")
     return table
+
+
+def _loading_errors(ds, sol, cols, scalars, cell, x1, x2) -> dict:
+    """The errors of the general loading's closed forms (tilt, torsion, displacement
+    control) added to ``cols`` (over time) and ``scalars``; returns table attributes."""
+    nt = ds.sizes["time"]
+    W = sol.normal_force
+    if sol.name == "hertz_tilted":
+        frames = _Frames(ds["p"])
+        a = sol.hertz.contact_radius
+        R = sol.scene.geometry.radius
+        for k in ("err_p0", "err_centroid_cells", "err_phi", "err_moment"):
+            cols[k] = np.full(nt, np.nan)
+        phi = np.stack([np.asarray(ds[v].values, float) for v in ("phi1", "phi2")], 1)
+        mom = np.stack([np.asarray(ds[v].values, float) for v in ("M1", "M2")], 1)
+        for k in range(nt):
+            p = frames[k]
+            tz = sol.tilts[k]
+            e = np.array(tz.centre)
+            total = float(p.sum())
+            centroid = np.array([(p.sum(1) @ x1) / total, (p.sum(0) @ x2) / total]) \
+                if total > 0 else np.full(2, np.nan)
+            cols["err_p0"][k] = _rel(float(p.max()), tz.max_pressure)
+            cols["err_centroid_cells"][k] = float(np.hypot(*(centroid - e))) / cell
+            phi_ref = np.array(tz.rotation)
+            m_ref = np.array(tz.moments)
+            cols["err_phi"][k] = float(np.hypot(*(phi[k] - phi_ref))) / max(
+                float(np.hypot(*phi_ref)), a / R)
+            cols["err_moment"][k] = float(np.hypot(*(mom[k] - m_ref))) / max(
+                float(np.hypot(*m_ref)), W * a)
+        return {"tilt_scales": "err_phi relative to |phi_ref| (a/R when phi_ref = 0), "
+                               "err_moment to |M_ref| (W a when M_ref = 0), the centroid "
+                               "of p against e = (M2/W, M1/W) in cells"}
+    if sol.name == "lubkin_torsion":
+        m = np.asarray(ds["M3"].values, float)
+        m_full = sol.full_slip_torque
+        cols["err_M3"] = np.abs(m - sol.torque) / m_full
+        attrs = {"full_slip_torque_Nm": m_full, "stuck_stiffness_Nm_per_rad":
+                 sol.stuck_stiffness}
+        first = _first_branch(sol.twist)
+        small = [k for k in first if sol.twist[k] != 0]
+        if small:
+            k = min(small, key=lambda i: abs(sol.twist[i]))
+            scalars["err_stuck_stiffness"] = _rel(m[k] / sol.twist[k], sol.stuck_stiffness)
+            attrs["stiffness_twist_rad"] = float(sol.twist[k])
+            attrs["stiffness_lubkin_over_stuck"] = float(
+                sol.torque[k] / sol.twist[k] / sol.stuck_stiffness)
+        k = int(np.argmax(np.abs(sol.twist)))
+        if abs(sol.torque[k]) >= 0.99 * m_full:
+            scalars["err_full_slip_torque"] = abs(abs(m[k]) - m_full) / m_full
+        return attrs
+    mu_w = sol.mu * W
+    T = np.asarray(ds["T1"].values, float)
+    t_ref = sol.displacement_force
+    cols["err_T1"] = np.abs(T - t_ref) / mu_w
+    first = [k for k in _first_branch(sol.displacement) if abs(sol.displacement[k]) <= sol.delta_gs]
+    scalars["err_first_branch"] = float(np.max(cols["err_T1"][first]))
+    if np.any(sol.plateau):
+        scalars["err_plateau"] = float(np.max(np.abs(np.abs(T[sol.plateau]) / mu_w - 1)))
+    attrs = {"delta_gs_m": sol.delta_gs}
+    cycles = sol.displacement_cycles()
+    if cycles:
+        start, stop = cycles[-1]
+        e_ref = sol.cycle_energy(start, stop)
+        d = np.asarray(ds["dissipation"].values, float)
+        om = np.asarray(ds["omega1"].values, float)
+        loop = abs(float(np.sum(0.5 * (T[start + 1:stop + 1] + T[start:stop])
+                                * np.diff(om[start:stop + 1]))))
+        scalars["err_cycle_energy"] = _rel(float(d[stop] - d[start]), e_ref)
+        scalars["err_loop_energy"] = _rel(loop, e_ref)
+        attrs.update({"cycle_instants": np.array([start, stop], dtype=np.int32),
+                      "cycle_energy_J": e_ref})
+    return attrs
+
+
+def _first_branch(series) -> list:
+    """The instants of the first monotonic branch from rest: up to the first reversal."""
+    v = np.asarray(series, float)
+    out, direction = [0], 0
+    for k in range(1, v.size):
+        step = v[k] - v[k - 1]
+        s = 0 if step == 0 else (1 if step > 0 else -1)
+        if s and direction and s != direction:
+            break
+        direction = direction or s
+        out.append(k)
+    return out
 
 
 def _bracket(x, xs, tol):
@@ -368,6 +460,22 @@ _LONG = {
     "err_omega3": "|omega3 - omega3_ref| / omega3_ref",
     "err_dissipation": "|D - D_ref| / D_ref at the last instant",
     "err_status": "fraction of cells in contact in either whose status differs",
+    "err_p0": "|max p - p0_ref| / p0_ref",
+    "err_centroid_cells": "|pressure centroid - e_ref| / cell, e = (M2/W, M1/W)",
+    "err_phi": "|(phi1, phi2) - phi_ref| / |phi_ref|",
+    "err_moment": "|(M1, M2) - M_ref| / |M_ref|",
+    "err_M3": "|M3 - M3_ref| / (3 pi mu W a / 16), Lubkin with Masing's rules",
+    "err_stuck_stiffness": "|M3/phi3 - 16 a^3/(3 C)| / (16 a^3/(3 C)) at the smallest "
+                           "twist of the first branch",
+    "err_full_slip_torque": "||M3| - 3 pi mu W a / 16| / (3 pi mu W a / 16) at the "
+                            "largest twist",
+    "err_T1": "|T1 - T1_ref| / (mu W), Mindlin-Deresiewicz under displacement control",
+    "err_first_branch": "max |T1 - T1_ref| / (mu W) on the first branch up to delta_gs",
+    "err_plateau": "max ||T1| / (mu W) - 1| where the closed form slides",
+    "err_cycle_energy": "|D - E_ref| / E_ref over the last closed cycle, D the archive's "
+                        "dissipation",
+    "err_loop_energy": "|loop area - E_ref| / E_ref over the last closed cycle, the area "
+                       "of T1 against omega1 by trapezoids",
 }
 
 
@@ -414,7 +522,10 @@ def _long_of(name):
 
 def _summary(table) -> str:
     keys = [k for k in ("err_p_max", "err_q1_max", "err_contact_radius",
-                        "err_stick_radius_cells", "err_omega1", "err_dissipation")
+                        "err_stick_radius_cells", "err_omega1", "err_dissipation",
+                        "err_centroid_cells", "err_phi", "err_M3", "err_stuck_stiffness",
+                        "err_full_slip_torque", "err_first_branch", "err_plateau",
+                        "err_cycle_energy")
             if k in table]
     if not keys:
         keys = [k for k in table.data_vars][:6]

@@ -10,6 +10,17 @@ the sweep applies it to every member (:mod:`contactpipe.pipeline.members`). Buil
     knots are stretched proportionally from ``time[0]`` (or ``load.fretting.window`` is
     set), so the shape of the program and the number of steps stay the same.
 
+``delta_amplitude``
+    The amplitude delta* [m] of a displacement-controlled tangential program: the base
+    scene's ``load.tangential_displacement`` knots are scaled so that their largest
+    |omega| is ``delta_amplitude`` (the shape of the program, its knots and steps stay).
+``delta_ratio``
+    The same amplitude given as delta*/delta_gs [1], delta_gs = 3 mu W C / (16 a) the
+    member's own closed-form partial / gross slip boundary
+    (:func:`contactpipe.fretting.closed_form_boundary`: a sphere, elastic or rigid bodies,
+    a scalar mu > 0, a constant normal force), after the dotted axes are applied (so a
+    swept mu or W moves delta_gs with it).
+
 Users register their own with :func:`register_parameter`.
 """
 from __future__ import annotations
@@ -19,9 +30,10 @@ import numbers
 from typing import Callable
 
 from ..exceptions import SceneError
+from ..fretting import closed_form_boundary
 
 __all__ = ["register_parameter", "derived_parameters", "registered", "relaxation_time",
-           "with_window", "tau_ratio"]
+           "with_window", "tau_ratio", "with_amplitude", "delta_amplitude", "delta_ratio"]
 
 _PARAMETERS: dict[str, Callable] = {}
 
@@ -121,6 +133,61 @@ def tau_ratio(scene, value):
         raise SceneError(f"tau_ratio must be a finite number > 0, got {value!r}")
     _, t_rel = relaxation_time(scene)
     return with_window(scene, float(value) * t_rel)
+
+
+def _positive(name, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not math.isfinite(float(value)) or float(value) <= 0:
+        raise SceneError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def with_amplitude(scene, amplitude: float):
+    """The scene with its ``load.tangential_displacement`` program scaled so that its
+    largest |omega| (over both components) is ``amplitude`` [m].
+
+    Raises
+    ------
+    SceneError
+        The scene has no displacement-controlled tangential program, or one that is 0
+        throughout.
+    """
+    values = scene.load.tangential_displacement
+    if values is None:
+        raise SceneError("the scene has no load.tangential_displacement (a displacement-"
+                         "controlled tangential program) whose amplitude could be set; give "
+                         "the base scene one, e.g. [0, 1e-6, -1e-6, 1e-6] [m]")
+    flat = [abs(float(x)) for v in (values if isinstance(values, tuple) else (values,))
+            for x in (v if isinstance(v, tuple) else (v,))]
+    largest = max(flat)
+    if largest == 0:
+        raise SceneError("load.tangential_displacement is 0 throughout: there is no "
+                         "amplitude to scale; give the program its shape, e.g. "
+                         "[0, 1, -1, 1] x 1e-6 m")
+    f = float(amplitude) / largest
+
+    def scaled(v):
+        return [scaled(x) for x in v] if isinstance(v, (tuple, list)) else float(v) * f
+
+    return scene.replace({"load.tangential_displacement": scaled(values)})
+
+
+@register_parameter("delta_amplitude")
+def delta_amplitude(scene, value):
+    """Displacement amplitude delta* = ``value`` [m] (:func:`with_amplitude`)."""
+    return with_amplitude(scene, _positive("delta_amplitude", value))
+
+
+@register_parameter("delta_ratio")
+def delta_ratio(scene, value):
+    """Displacement amplitude delta* = ``value`` x delta_gs, the member's closed-form
+    partial / gross slip boundary (:func:`contactpipe.fretting.closed_form_boundary`)."""
+    ratio = _positive("delta_ratio", value)
+    d_gs, why = closed_form_boundary(scene)
+    if not math.isfinite(d_gs):
+        raise SceneError(f"delta_ratio needs the closed-form boundary delta_gs of the "
+                         f"scene, which has none: {why}; sweep delta_amplitude [m] instead")
+    return with_amplitude(scene, ratio * d_gs)
 
 
 def registered(name: str) -> Callable | None:

@@ -4,7 +4,8 @@
 ``contactpipe plot STRESS.nc -o FIG.png [--kind stress] [--variable FIELD]`` for a stress
 file (written by ``contactpipe stress`` or the pipeline's ``[stress]`` product);
 ``contactpipe plot SWEEP_DIR/ -o FIG.png [--kind sweep] [--variable NAME]`` for a sweep
-folder. Each kind of input takes its own kinds (:data:`INPUTS`); a kind that does not
+folder, ``contactpipe plot SWEEP_DIR/ -o FIG.png --kind fretting-map [--against mu|W]`` for
+the fretting map of a displacement-controlled fretting sweep. Each kind of input takes its own kinds (:data:`INPUTS`); a kind that does not
 apply to the input is one line on stderr and exit status 2, nothing written.
 
 - :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
@@ -15,6 +16,9 @@ apply to the input is one line on stderr and exit status 2, nothing written.
 - :func:`plot_hysteresis`: the fretting loop T1 against omega1.
 - :func:`plot_radii`: contact and stick radii against time.
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
+- :func:`plot_fretting_map`: the regime of each member of a fretting sweep over the
+  displacement amplitude and mu or W, with the closed-form boundary
+  (:mod:`contactpipe.pipeline.plot_fretting`); :func:`plot_energy_ratio` its energy ratios.
 - :func:`plot_stress`: a stress field or fatigue criterion (von Mises, or the criterion's
   main field when the file holds one) on the x1-x3 plane through the centre and on the
   surface (:mod:`contactpipe.pipeline.plot_stress` draws the panels).
@@ -54,25 +58,26 @@ from ..nomenclature import VARIABLES
 from ..stress import is_stress_file, open_stress
 from .combine import MANIFEST, open_sweep
 from .compare import load_dataset
+from .figures import DPI, FIGSIZE, axes_of, new_figure
+from .plot_fretting import plot_energy_ratio, plot_fretting_map
 from .inputs import centre_rows, grid_of, radius_of_area, scene_of
 from .plot_stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
 from .reference import ClosedForm, closed_form_for, closed_form_solution
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
-           "plot_stress", "plot_stress_section", "plot_stress_surface", "standard_figures",
+           "plot_stress", "plot_stress_section", "plot_stress_surface", "plot_fretting_map",
+           "plot_energy_ratio", "standard_figures",
            "save_figure", "new_figure", "has_tangential_load", "figure_applies",
            "input_kind", "open_input", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS",
            "INPUTS"]
 
-FIGSIZE = (8.0, 5.0)        # in
-DPI = 100
 #: The figures of an archive (``all``: every one that applies, into a folder).
 KINDS = ("profiles", "maps", "hysteresis", "radii")
 #: Each kind of input: what it is called, and the figure kinds that apply (default first).
 INPUTS = {
     "archive": ("an archive", KINDS + ("all",)),
     "stress": ("a stress file", ("stress",)),
-    "sweep": ("a sweep folder", ("sweep",)),
+    "sweep": ("a sweep folder", ("sweep", "fretting-map")),
 }
 GREY = "0.6"
 GREY_WIDE = "0.78"          # a wide light line under the numerical one
@@ -80,22 +85,6 @@ STATUS_COLOURS = ("#e6e6e6", "#2c7bb6", "#d7191c")     # separated, stick, slip
 
 
 # --------------------------------------------------------------------------- figures
-
-def new_figure():
-    """A new 8 x 5 in Figure at 100 dpi with a tight layout (not attached to pyplot)."""
-    # matplotlib is imported here, not at the top: a heavy import that only drawing needs
-    # (the command line and the pipeline import this module whatever they run)
-    from matplotlib.figure import Figure
-    return Figure(figsize=FIGSIZE, dpi=DPI, layout="tight")
-
-
-def _axes(ax):
-    """(Figure, Axes): ``ax`` and its figure, or a new figure with one Axes."""
-    if ax is not None:
-        return ax.get_figure(), ax
-    fig = new_figure()
-    return fig, fig.add_subplot()
-
 
 def _grid_axes(fig, nrows, ncols, **kw):
     """(Figure, 2-D array of Axes) drawn into ``fig`` (a new figure when None)."""
@@ -337,7 +326,7 @@ def _draw_closed_form(sol, k, xf, x2_row, scale, ax_p, ax_q):
             pc = sol.pressure(k, xf, x2_row) / scale[0]
             pc = np.where(np.isfinite(pc), pc, np.nan)
             ax_p.plot(xf / scale[1], pc, "-", color=GREY, lw=1.0, zorder=0)
-        if ax_q is not None:
+        if ax_q is not None and sol.has_field_shear():
             ax_q.plot(xf / scale[1], sol.shear(k, xf, x2_row) / scale[0], "-", color=GREY,
                       lw=1.0, zorder=0)
 
@@ -559,7 +548,7 @@ def plot_hysteresis(ds, *, ax=None):
     """
     with _dataset(ds) as ds:
         _require_frictional(ds, "the hysteresis loop")
-        fig, ax = _axes(ax)
+        fig, ax = axes_of(ax)
         om = np.asarray(ds["omega1"].values, float)
         T = np.asarray(ds["T1"].values, float)
         sol = _solution(ds)
@@ -596,7 +585,7 @@ def plot_radii(ds, *, ax=None):
     matplotlib.figure.Figure
     """
     with _dataset(ds) as ds:
-        fig, ax = _axes(ax)
+        fig, ax = axes_of(ax)
         t = np.asarray(ds["time"].values, float)
         a = np.sqrt(np.asarray(ds["contact_area"].values, float) / math.pi)
         ax.plot(t, a * 1e3, "o-", ms=3, color="C0", label="contact radius")
@@ -701,7 +690,7 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
         if xname not in sw.coords and xname not in sw.dims and xname not in sw:
             raise ArchiveError(f"x = {x!r} is not a coordinate of the sweep")
         extra = [d for d in da.dims if d not in BASE_DIMS]
-        fig, ax = _axes(ax)
+        fig, ax = axes_of(ax)
         combos = list(itertools.product(*[range(da.sizes[d]) for d in extra])) \
             if extra else [()]
         xs_all = sw[xname] if xname in sw.variables else None
@@ -806,7 +795,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default=None,
                         help="which figure: for an archive profiles (default), maps, "
                              "hysteresis, radii or all; for a stress file stress; for a "
-                             "sweep folder sweep")
+                             "sweep folder sweep (default) or fretting-map")
     parser.add_argument("--instant", type=int, default=None,
                         help="instant index K (negative from the end): the one profile, "
                              "map or stress field shown")
@@ -814,6 +803,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="sweep folder: the series to plot (default contact_area); "
                              "stress file: the field (default the criterion's, else "
                              "von_mises)")
+    parser.add_argument("--against", choices=("mu", "W"), default=None,
+                        help="fretting-map: the ordinate, mu or W (default the one the "
+                             "members vary)")
 
 
 def _inputs(source: pathlib.Path) -> list:
@@ -835,6 +827,8 @@ def _draw(kind, source, args):
     k = -1 if args.instant is None else args.instant
     if kind == "sweep":
         return plot_sweep(source, args.variable or "contact_area")
+    if kind == "fretting-map":
+        return plot_fretting_map(source, args.against)
     if kind == "stress":
         return plot_stress(source, args.variable, k)
     if kind == "profiles":

@@ -22,9 +22,34 @@ draw on. All formulae come from :mod:`contactpipe.analytic`.
     T1 series), the stick radius, the tangential compliance loop omega1(T1) and the
     dissipated energy (an Iwan model with the same virgin curve, exact for every Masing
     history: it reproduces Johnson's energy per cycle, eq. 7.64).
+``hertz_tilted``
+    a sphere, elastic or rigid bodies, no shear, constant W, tilted by a moment
+    (``moment1`` / ``moment2``) or a rotation (``rotation1`` / ``rotation2``) program,
+    no twist: the Hertz contact moved by e = (M2/W, M1/W), with phi = e/R
+    (:func:`contactpipe.analytic.hertz_tilted`; a rotation phi gives M = W R phi).
+``lubkin_torsion``
+    a sphere, elastic or rigid bodies with beta = 0, mu > 0, constant W, no tangential
+    force, no tilt, a twist program under rotation control (``rotation3``): Hertz pressure
+    and Lubkin's torque M3(phi3) ([L51]_) after Masing's rules (Deresiewicz's oscillating
+    torsion, [D54]_), with the stuck stiffness 16 a^3/(3 C) and the full-slip torque
+    3 pi mu W a / 16.
+``mindlin_displacement``
+    a sphere, elastic or rigid bodies with beta = 0, mu > 0, constant W, no tilt or twist,
+    a displacement-controlled tangential program along x1 (``tangential_displacement``)
+    from 0: Hertz pressure and the Mindlin-Deresiewicz loop under displacement control
+    with gross slip (:func:`contactpipe.analytic.displacement_loop_force`): the first
+    branch, the plateaus |T| = mu W, and the energy of each closed cycle,
+    E_MD(mu W) + 4 mu W (delta* - delta_gs) beyond gross slip.
 
 Closed-form fields are averaged over each cell (:func:`cell_average_field`), which is
 what a piecewise-constant traction should match.
+
+References
+----------
+.. [L51] J. L. Lubkin, "The torsion of elastic spheres in contact", J. Appl. Mech. 18
+   (1951) 183-187.
+.. [D54] H. Deresiewicz, "Contact of elastic spheres under an oscillating torsional
+   couple", J. Appl. Mech. 21 (1954) 52-56 (and Johnson, *Contact Mechanics*, §7.4).
 """
 from __future__ import annotations
 
@@ -32,15 +57,20 @@ import numpy as np
 
 from .. import analytic
 from ..exceptions import ArchiveError, SceneError
+from ..fretting import loop_cycles
 from ..materials import composite_modulus
 from ..planning import pair_couples
 from .inputs import scene_of
 
 __all__ = ["ClosedForm", "closed_form_for", "closed_form_solution", "diagnose",
            "no_closed_form_message", "cell_average_field", "iwan_dissipation",
-           "CLOSED_FORMS", "IWAN_ELEMENTS", "LEE_RADOK_SAMPLES", "LEE_RADOK_STEPS"]
+           "CLOSED_FORMS", "LOADING_FORMS", "IWAN_ELEMENTS", "LEE_RADOK_SAMPLES",
+           "LEE_RADOK_STEPS"]
 
-CLOSED_FORMS = ("hertz", "flat_punch", "lee_radok", "mindlin_deresiewicz")
+CLOSED_FORMS = ("hertz", "flat_punch", "lee_radok", "mindlin_deresiewicz", "hertz_tilted",
+                "lubkin_torsion", "mindlin_displacement")
+#: The closed forms of the general loading (moments, rotations, displacement control).
+LOADING_FORMS = ("hertz_tilted", "lubkin_torsion", "mindlin_displacement")
 #: Jenkins elements of the Iwan model behind the closed-form dissipation.
 IWAN_ELEMENTS = 100_000
 #: Radial samples of the tabulated Lee-Radok pressure, and its time steps.
@@ -52,6 +82,18 @@ def _load_facts(scene):
     b1, b2 = scene.indenter.body(), scene.halfspace.body()
     t, W, T1, T2 = scene.load.knots()
     return b1, b2, t, W, T1, T2
+
+
+def _program_facts(scene) -> dict:
+    """What the six programs do (at the knots): which rows are displacement-controlled,
+    whether anything tilts or twists."""
+    p = scene.load.programs()
+    tilt = [bool(np.any(np.nan_to_num(p.force[i]) != 0) or np.any(np.nan_to_num(p.motion[i])
+                                                                 != 0)) for i in (3, 4)]
+    twist = bool(np.any(np.nan_to_num(p.force[5]) != 0)
+                 or np.any(np.nan_to_num(p.motion[5]) != 0))
+    return {"programs": p, "normal_force": p.is_force(0), "tangential_force": p.is_force(1),
+            "tilt": any(tilt), "twist": twist, "twist_rotation": not p.is_force(5) and twist}
 
 
 def diagnose(scene) -> tuple[str | None, dict]:
@@ -66,17 +108,25 @@ def diagnose(scene) -> tuple[str | None, dict]:
         when ``name`` is None): what the scene would need to admit it.
     """
     b1, b2, t, W, T1, T2 = _load_facts(scene)
+    f = _program_facts(scene)
     shape = scene.geometry.shape
-    mu = float(scene.friction.mu)
-    has_t = bool(np.any(T1 != 0) or np.any(T2 != 0))
+    mapped = scene.friction.mapped
+    mu = float(scene.friction.largest)
+    force_w = f["normal_force"]
+    has_t = bool(np.any(np.nan_to_num(T1, nan=1.0) != 0)
+                 or np.any(np.nan_to_num(T2, nan=1.0) != 0))
     couples = pair_couples(b1, b2)
     kinds = (b1.kind, b2.kind)
     elastic = all(k in ("rigid", "elastic") for k in kinds)
-    constant_w = bool(np.all(W == W[0]))
-    shear_free = mu == 0 or (not has_t and not couples)
+    constant_w = force_w and bool(np.all(W == W[0]))
+    shear_free = mu == 0 or (not has_t and not couples and not f["twist"])
     mat = f"indenter.material = {kinds[0]!r}, halfspace.material = {kinds[1]!r}"
     shear_why = ("shear: friction.mu = {:g} with {}".format(
-        mu, "a tangential load" if has_t else "a coupled pair (Dundurs beta != 0)"))
+        mu, "a tangential load" if has_t else "a twist" if f["twist"]
+        else "a coupled pair (Dundurs beta != 0)"))
+    plain = (not f["tilt"], "needs no tilt (moment1 / moment2, rotation1 / rotation2 "
+                            "absent or 0)")
+    scalar_mu = (not mapped, "needs a scalar friction.mu (not a map)")
     why = {}
 
     def need(name, conds):
@@ -90,13 +140,13 @@ def diagnose(scene) -> tuple[str | None, dict]:
                                                f"geometry.shape = {shape!r}"),
             (elastic, f"needs elastic or rigid bodies, got {mat}"),
             (shear_free, f"needs no shear, got {shear_why}"),
-            (constant_w, "needs a constant load.normal_force")]):
+            (constant_w, "needs a constant load.normal_force"), plain]):
         return "hertz", why
     if need("flat_punch", [
             (shape == "flat_punch", f"needs geometry.shape = 'flat_punch', got {shape!r}"),
             (elastic, f"needs elastic or rigid bodies, got {mat}"),
             (shear_free, f"needs no shear, got {shear_why}"),
-            (constant_w, "needs a constant load.normal_force")]):
+            (constant_w, "needs a constant load.normal_force"), plain]):
         return "flat_punch", why
     one_rigid_one_visco = sorted(kinds) == ["rigid", "viscoelastic"]
     if need("lee_radok", [
@@ -104,20 +154,55 @@ def diagnose(scene) -> tuple[str | None, dict]:
             (one_rigid_one_visco, f"needs a rigid body on a viscoelastic one, got {mat}"),
             (not has_t, "needs no tangential load"),
             (shear_free, f"needs no shear, got {shear_why}"),
-            (bool(np.all(np.diff(W) >= 0)), "needs a normal force that never decreases "
-                                             "(a shrinking contact is Ting's problem)")]):
+            (force_w and bool(np.all(np.diff(W) >= 0)),
+             "needs a normal force that never decreases (a shrinking contact is Ting's "
+             "problem)"), plain]):
         return "lee_radok", why
+    sphere = (shape == "sphere", f"needs a sphere, got geometry.shape = {shape!r}")
     if need("mindlin_deresiewicz", [
-            (shape == "sphere", f"needs a sphere, got geometry.shape = {shape!r}"),
-            (elastic, f"needs elastic or rigid bodies, got {mat}"),
+            sphere, (elastic, f"needs elastic or rigid bodies, got {mat}"),
             (not couples, "needs Dundurs beta = 0 (identical materials, or incompressible)"),
-            (mu > 0, "needs friction.mu > 0"),
+            (mu > 0, "needs friction.mu > 0"), scalar_mu,
+            (f["tangential_force"], "needs a force-controlled tangential load"),
             (has_t, "needs a tangential load"),
-            (not np.any(T2 != 0), "needs the tangential load along x1 (T2 = 0)"),
+            (not np.any(np.nan_to_num(T2) != 0), "needs the tangential load along x1 (T2 = 0)"),
             (T1[0] == 0, f"needs the tangential load to start from 0, got "
                          f"{T1[0]:g} N at time[0]"),
-            (constant_w, "needs a constant load.normal_force")]):
+            (constant_w, "needs a constant load.normal_force"),
+            (not f["tilt"] and not f["twist"], "needs no tilt or twist")]):
         return "mindlin_deresiewicz", why
+    return _diagnose_loading(scene, f, need, why, sphere, elastic, mat, couples, mu,
+                             scalar_mu, has_t, constant_w, shear_free, shear_why)
+
+
+def _diagnose_loading(scene, f, need, why, sphere, elastic, mat, couples, mu, scalar_mu,
+                      has_t, constant_w, shear_free, shear_why):
+    """The closed forms of the general loading (:data:`LOADING_FORMS`), in order."""
+    p = f["programs"]
+    elastic_ = (elastic, f"needs elastic or rigid bodies, got {mat}")
+    w_const = (constant_w, "needs a constant, force-controlled load.normal_force")
+    if need("hertz_tilted", [
+            sphere, elastic_, (shear_free, f"needs no shear, got {shear_why}"), w_const,
+            (f["tilt"], "needs a tilt (moment1 / moment2 or rotation1 / rotation2 != 0)"),
+            (not f["twist"], "needs no twist (moment3 / rotation3 absent or 0)")]):
+        return "hertz_tilted", why
+    beta0 = (not couples, "needs Dundurs beta = 0 (identical materials, or incompressible)")
+    if need("lubkin_torsion", [
+            sphere, elastic_, beta0, (mu > 0, "needs friction.mu > 0"), scalar_mu, w_const,
+            (f["twist_rotation"], "needs a twist under rotation control (load.rotation3)"),
+            (f["tangential_force"] and not has_t, "needs no tangential load"),
+            (not f["tilt"], "needs no tilt")]):
+        return "lubkin_torsion", why
+    om1, om2 = p.motion[1], p.motion[2]
+    if need("mindlin_displacement", [
+            sphere, elastic_, beta0, (mu > 0, "needs friction.mu > 0"), scalar_mu, w_const,
+            (not f["tangential_force"], "needs load.tangential_displacement"),
+            (f["tangential_force"] or not np.any(om2 != 0),
+             "needs the displacement along x1 (omega2 = 0)"),
+            (f["tangential_force"] or om1[0] == 0,
+             f"needs the displacement to start from 0, got {om1[0]:g} m at time[0]"),
+            (not f["tilt"] and not f["twist"], "needs no tilt or twist")]):
+        return "mindlin_displacement", why
     return None, why
 
 
@@ -131,7 +216,8 @@ def closed_form_for(ds) -> str | None:
 
     Returns
     -------
-    {"hertz", "flat_punch", "lee_radok", "mindlin_deresiewicz"} or None
+    str or None
+        One of :data:`CLOSED_FORMS`
         See the module docstring for the conditions of each.
     """
     return diagnose(scene_of(ds))[0]
@@ -226,7 +312,8 @@ class ClosedForm:
         self.hertz = self.punch = None
         self.has_pressure = True
         self._lr_cache = {}
-        if name in ("hertz", "mindlin_deresiewicz"):
+        self.tilts = None
+        if name in ("hertz", "mindlin_deresiewicz") + LOADING_FORMS:
             e_star = composite_modulus(b1, b2)
             if geo.shape == "sphere":
                 self.hertz = analytic.hertz_sphere(self.normal_force, geo.radius, e_star)
@@ -245,6 +332,8 @@ class ClosedForm:
             self.has_pressure = self.step_load and self.body.creep.phi0 > 0
         if name == "mindlin_deresiewicz":
             self._setup_md(ds, b1, b2)
+        elif name in LOADING_FORMS:
+            self._setup_loading(ds, b1, b2, e_star)
 
     # -- Mindlin-Deresiewicz -------------------------------------------------------------
 
@@ -277,6 +366,76 @@ class ClosedForm:
         delta_max = 3.0 * mu_w * self.compliance / (16.0 * h.contact_radius)
         self._dissipation = (iwan_dissipation(omega, mu_w, delta_max)
                              if delta_max > 0 else np.zeros_like(omega))
+
+    # -- general loading ---------------------------------------------------------------
+
+    def _mesh(self, ds):
+        """The six programs on the scene's time mesh, and each archive instant's index
+        into it."""
+        p = self.scene.load.programs(self.scene.time.steps)
+        idx = np.searchsorted(p.t, self.times - 1e-9 * max(self.window, 1e-300))
+        idx = np.clip(idx, 0, p.t.size - 1)
+        if not np.allclose(p.t[idx], self.times, rtol=0,
+                           atol=1e-9 * max(self.window, 1.0)):
+            raise ArchiveError("the archive's instants are not on its scene's time mesh; "
+                               "cannot rebuild the load history")
+        return p, idx
+
+    def _setup_loading(self, ds, b1, b2, e_star):
+        p, idx = self._mesh(ds)
+        W, R, a = self.normal_force, self.scene.geometry.radius, self.hertz.contact_radius
+        self._idx = idx
+        mu_w = self.mu * W
+        if self.name == "hertz_tilted":
+            # a moment where given, else the moment of the imposed (or held) rotation
+            m = [np.where(np.isnan(p.force[i]), W * R * np.nan_to_num(p.motion[j]),
+                          p.force[i]) for i, j in ((3, 3), (4, 4))]
+            self.tilts = [analytic.hertz_tilted(W, m[0][i], m[1][i], R, e_star) for i in idx]
+        elif self.name == "lubkin_torsion":
+            self.torsion_compliance = analytic.torsional_compliance(
+                b1.young, b1.poisson, b2.young, b2.poisson)
+            self.twist = p.motion[5][idx]
+            self.torque = analytic.torsion_loop_moment(
+                p.motion[5][:idx[-1] + 1], self.mu, W, a, self.torsion_compliance)[idx]
+            self.full_slip_torque = analytic.full_slip_torque(self.mu, W, a)
+            self.stuck_stiffness = analytic.torsional_stiffness(a, self.torsion_compliance)
+        else:
+            self.compliance = analytic.tangential_compliance_sum(
+                b1.young, b1.poisson, b2.young, b2.poisson)
+            self.delta_gs = analytic.gross_slip_displacement(self.mu, W, a, self.compliance)
+            om = p.motion[1][:idx[-1] + 1]
+            self.displacement = p.motion[1][idx]
+            self._T = analytic.displacement_loop_force(om, self.mu, W, a, self.compliance)
+            self.displacement_force = self._T[idx]
+            self.plateau = np.isclose(np.abs(self._T[idx]), mu_w, rtol=1e-12, atol=0) \
+                & (idx > 0)
+
+    def cycle_energy(self, start, stop, per_step=200):
+        """Closed-form energy [J] of the cycle between archive instants ``start`` and
+        ``stop`` (displacement control): E_MD(mu W) + 4 mu W (delta* - delta_gs) beyond gross
+        slip, E_MD(T(delta*)) below (:func:`analytic.displacement_energy_per_cycle`) for a
+        cycle symmetric about 0; otherwise the area of the closed-form loop, the
+        displacement sampled ``per_step`` times per archive step."""
+        om = self.displacement[start:stop + 1]
+        lo, hi = float(om.min()), float(om.max())
+        c = self.compliance
+        a = self.hertz.contact_radius
+        if abs(hi + lo) <= 1e-9 * (hi - lo):
+            return analytic.displacement_energy_per_cycle(0.5 * (hi - lo), self.mu,
+                                                          self.normal_force, a, c)
+        head = self.displacement[:start + 1]
+        fine = np.concatenate([np.linspace(x, y, per_step + 1)[1:]
+                               for x, y in zip(om[:-1], om[1:])])
+        T = analytic.displacement_loop_force(np.concatenate([head, fine]), self.mu,
+                                             self.normal_force, a, c)
+        path = np.concatenate([om[:1], fine])
+        T = T[head.size - 1:]
+        return abs(float(np.sum(0.5 * (T[1:] + T[:-1]) * np.diff(path))))
+
+    def displacement_cycles(self):
+        """(start, stop) archive instants of each closed cycle of the imposed displacement
+        (:func:`contactpipe.fretting.loop_cycles`)."""
+        return loop_cycles(self.displacement)
 
     def history(self, k):
         """Tangential force samples [N] up to instant ``k`` (Mindlin-Deresiewicz)."""
@@ -328,9 +487,17 @@ class ClosedForm:
     def has_field_pressure(self) -> bool:
         return self.name != "lee_radok" or self.has_pressure
 
+    def has_field_shear(self) -> bool:
+        """Whether :meth:`shear` is the closed-form q1 (Mindlin-Deresiewicz, or 0 without
+        shear); False for torsion and displacement control, whose shear field has no
+        closed form here."""
+        return self.name not in ("lubkin_torsion", "mindlin_displacement")
+
     def pressure(self, k, x1, x2):
         """Closed-form pressure [Pa] at positions (x1, x2) [m] (broadcast) at instant k."""
         x1, x2 = np.broadcast_arrays(np.asarray(x1, float), np.asarray(x2, float))
+        if self.tilts is not None:
+            return self.tilts[k].pressure(x1, x2)
         if self.hertz is not None:
             if isinstance(self.hertz, analytic.HertzSphere):
                 return self.hertz.pressure(np.hypot(x1, x2))
@@ -359,6 +526,8 @@ class ClosedForm:
             return self.punch.cell_average_pressure(x1[:, None], x2[None, :], d1, d2)
         reach = self.contact_radius(k) if self.hertz is None else \
             max(getattr(self.hertz, "semi_axes", (self.hertz_radius(),) * 2))
+        if self.tilts is not None:
+            reach += float(np.hypot(*self.tilts[k].centre))
         return cell_average_field(lambda a, b: self.pressure(k, a, b), x1, x2, d1, d2,
                                   radius=1.05 * reach)
 
@@ -384,6 +553,8 @@ class ClosedForm:
 
     def approach(self, k):
         """Normal approach omega3 [m] at instant k."""
+        if self.tilts is not None:
+            return self.tilts[k].approach
         if self.hertz is not None:
             return self.hertz.approach
         if self.punch is not None:
