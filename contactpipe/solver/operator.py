@@ -15,6 +15,7 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
+import scipy.fft
 
 from .convolution import Convolver
 from .influence import body_kernel_parts, body_kernels, pair_kernels
@@ -175,6 +176,57 @@ class ContactOperator:
                 value = float(np.max(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + c ** 2)))
             self._derived[key] = value
         return self._derived[key]
+
+    def normal_preconditioner(self):
+        """``M(v)``: the inverse of the padded circulant of K33 applied to v (one FFT pair),
+        a spectral approximation of the normal operator's inverse for preconditioned CG;
+        None where that spectrum is not positive (cached)."""
+        if "precondition33" not in self._derived:
+            k = np.real(self.k["33"])
+            m = self.conv.m1 * self.conv.m2
+            ok = bool(np.all(np.isfinite(k))) and float(k.min()) > 0.0
+            self._derived["precondition33"] = 1.0 / (k * (m * m)) if ok else None
+        sigma = self._derived["precondition33"]
+        if sigma is None:
+            return None
+        return lambda v: self.conv.convolve(sigma, v)
+
+    def coarse_normal(self):
+        """The normal operator on the grid coarsened by two in each direction (cached), or
+        None where a side is odd.
+
+        Galerkin coarsening: a coarse cell carries a uniform pressure over its 2 x 2 fine
+        cells and its displacement is their mean, so the coarse kernel is
+        K_c(D) = Σ_e w_e K(2D + e), e in {-1, 0, 1}², w_e = (2 - |e1|)(2 - |e2|)/4, read
+        from the fine kernel (one inverse real FFT of its spectrum, once per operator: set-up
+        work, like the kernel spectra, not counted in FFT pairs). Only ``normal`` (K33) is
+        available on the result; its FFT pairs are counted by the coarse grid's own
+        :func:`convolver`.
+        """
+        if "coarse" not in self._derived:
+            self._derived["coarse"] = self._coarsened()
+        return self._derived["coarse"]
+
+    def _coarsened(self):
+        conv = self.conv
+        if conv.n1 % 2 or conv.n2 % 2:
+            return None
+        c1, c2 = conv.n1 // 2, conv.n2 // 2
+        fine = scipy.fft.irfft2(self.k["33"] * (conv.m1 * conv.m2), s=(conv.m1, conv.m2))
+        d1, d2 = np.arange(-(c1 - 1), c1), np.arange(-(c2 - 1), c2)
+        acc = np.zeros((d1.size, d2.size))
+        for e1 in (-1, 0, 1):
+            for e2 in (-1, 0, 1):
+                w = (2 - abs(e1)) * (2 - abs(e2)) / 4.0
+                acc += w * fine[np.ix_((2 * d1 + e1) % conv.m1, (2 * d2 + e2) % conv.m2)]
+        kernel = np.zeros((2 * c1, 2 * c2))
+        kernel[np.ix_(d1 % (2 * c1), d2 % (2 * c2))] = acc
+        coarse = object.__new__(ContactOperator)
+        coarse.conv = convolver(c1, c2, conv.backend, conv.threads)
+        coarse.w1, coarse.w2, coarse.rigid = self.w1, self.w2, False
+        coarse.k = {"33": coarse.conv.kernel_spectrum(kernel)}
+        coarse._derived = {}
+        return coarse
 
     def full(self, p, q1=None, q2=None):
         """(u1, u2, u3) [m] from all tractions (3 forward, 3 inverse transforms at most)."""
