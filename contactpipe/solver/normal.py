@@ -40,10 +40,11 @@ __all__ = ["COARSE_TOL", "COARSEST", "NormalControl", "NormalResult", "prolong",
            "solve_normal"]
 
 #: The multilevel start coarsens while every side stays at or above this many cells [1].
-COARSEST = 32
-#: Relative tolerance of the coarse solves of the multilevel start [1] (the caller's, when
-#: tighter is not asked: a start needs no more than the coarse grid's own accuracy).
-COARSE_TOL = 1e-4
+COARSEST = 16
+#: Relative tolerance of the coarse solves of the multilevel start [1] (the caller's where
+#: that is looser): a start needs no more than the coarse grid's own accuracy, and 1e-3 to
+#: 1e-5 cost the same to within 10 % (docs/design-choices.md).
+COARSE_TOL = 1e-3
 
 
 @dataclass
@@ -96,17 +97,21 @@ def restrict(a):
 
 
 def prolong(a):
-    """Cell-centred bilinear interpolation of a coarse field (n1, n2) onto the grid refined
-    by two (2 n1, 2 n2): weights 9/16, 3/16, 3/16, 1/16 of the nearest coarse cells, the
-    edge cells continued outwards."""
+    """Cell-centred bilinear interpolation of a coarse pressure (n1, n2) onto the grid
+    refined by two (2 n1, 2 n2): weights 9/16, 3/16, 3/16, 1/16 of the nearest coarse
+    cells, the edge cells continued outwards; zero in the fine cells of a coarse cell
+    without pressure (the start then lies inside the contact: a cell that must join it
+    is released by the CG at no cost, one that must leave it costs a projection and an
+    FFT pair)."""
     n1, n2 = a.shape
     e = np.pad(a, 1, mode="edge")
     out = np.empty((2 * n1, 2 * n2))
     for i, di in ((0, -1), (1, 1)):
         for j, dj in ((0, -1), (1, 1)):
-            out[i::2, j::2] = (9.0 * a + 3.0 * e[1 + di:n1 + 1 + di, 1:-1]
-                               + 3.0 * e[1:-1, 1 + dj:n2 + 1 + dj]
-                               + e[1 + di:n1 + 1 + di, 1 + dj:n2 + 1 + dj]) / 16.0
+            out[i::2, j::2] = np.where(
+                a > 0.0, (9.0 * a + 3.0 * e[1 + di:n1 + 1 + di, 1:-1]
+                          + 3.0 * e[1:-1, 1 + dj:n2 + 1 + dj]
+                          + e[1 + di:n1 + 1 + di, 1 + dj:n2 + 1 + dj]) / 16.0, 0.0)
     return out
 
 

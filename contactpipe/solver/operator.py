@@ -25,20 +25,36 @@ __all__ = ["BodySpectra", "ContactOperator", "body_spectra", "body_spectra_parts
 
 
 class BodySpectra(dict):
-    """Kernel spectra (scaled for the inverse FFT) of one body on one grid: key 'ij'."""
+    """Kernel spectra (scaled for the inverse FFT) of one body on one grid: key 'ij'.
+
+    Attributes
+    ----------
+    cell : tuple of float or None
+        The cell sides (Δ1, Δ2) [m] of the grid, where known.
+    """
+
+    cell = None
+
+    @classmethod
+    def on(cls, spectra, cell):
+        """The spectra (a dict) with the cell sides of their grid."""
+        out = cls(spectra)
+        out.cell = None if cell is None else (float(cell[0]), float(cell[1]))
+        return out
 
 
 @lru_cache(maxsize=16)
 def _body_spectra_cached(n1, n2, d1, d2, young, poisson, backend, threads):
     conv = convolver(n1, n2, backend, threads)
     kernels = body_kernels(n1, n2, d1, d2, young, poisson)
-    return BodySpectra({k: conv.kernel_spectrum(v) for k, v in kernels.items()})
+    return BodySpectra.on({k: conv.kernel_spectrum(v) for k, v in kernels.items()}, (d1, d2))
 
 
 @lru_cache(maxsize=8)
 def _part_spectra_cached(n1, n2, d1, d2, shear_modulus, backend, threads):
     conv = convolver(n1, n2, backend, threads)
-    return tuple(BodySpectra({k: conv.kernel_spectrum(v) for k, v in part.items()})
+    return tuple(BodySpectra.on({k: conv.kernel_spectrum(v) for k, v in part.items()},
+                                (d1, d2))
                  for part in body_kernel_parts(n1, n2, d1, d2, shear_modulus))
 
 
@@ -90,8 +106,8 @@ def weighted_spectra(parts, weights):
         return None, 0.0
     if len(parts) == 1:
         return parts[0], w[0]
-    total = BodySpectra({key: sum(wj * part[key] for wj, part in zip(w, parts) if wj != 0.0)
-                         for key in parts[0]})
+    total = BodySpectra.on({key: sum(wj * part[key] for wj, part in zip(w, parts) if wj != 0.0)
+                            for key in parts[0]}, parts[0].cell)
     return total, 1.0
 
 
@@ -118,6 +134,8 @@ class ContactOperator:
         s2, c2 = weighted_spectra(spectra2, self.w2)
         self.rigid = s1 is None and s2 is None
         self.k = pair_kernels(s1, s2, c1, c2) if not self.rigid else None
+        #: the cell sides (Δ1, Δ2) [m] where the spectra know them, else None
+        self.cell = next((getattr(x, "cell", None) for x in (s1, s2) if x is not None), None)
         self._derived = {}          # constants derived from the spectra, computed once
 
     # -- the pieces the inner problems need -------------------------------------------
@@ -178,17 +196,27 @@ class ContactOperator:
         return self._derived[key]
 
     def normal_preconditioner(self):
-        """``M(v)``: the inverse of the padded circulant of K33 applied to v (one FFT pair),
-        a spectral approximation of the normal operator's inverse for preconditioned CG;
-        None where that spectrum is not positive (cached)."""
+        """``M(v)``: v filtered by the symbol of (−Δ)^½, the discrete square root of the
+        negative Laplacian on the padded grid (one FFT pair), an approximation of the
+        normal operator's inverse (K33 behaves as 1/|ξ|) for preconditioned CG (cached).
+
+        The symbol is sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the padded grid's
+        angular frequencies, with the zero mode set to the smallest other value (M is then
+        symmetric positive definite; its scale does not matter to CG). Not the inverse of
+        the padded K33 circulant itself: with rectangular cells that circulant has
+        negative modes, and even clipped to positive it made a worse preconditioner
+        (docs/design-choices.md). Cells of unknown sides are taken square.
+        """
         if "precondition33" not in self._derived:
-            k = np.real(self.k["33"])
-            m = self.conv.m1 * self.conv.m2
-            ok = bool(np.all(np.isfinite(k))) and float(k.min()) > 0.0
-            self._derived["precondition33"] = 1.0 / (k * (m * m)) if ok else None
+            conv = self.conv
+            d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
+            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.m1)[:, None]
+            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.m2)[None, :]
+            sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
+                            + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
+            sigma[0, 0] = sigma[sigma > 0].min()
+            self._derived["precondition33"] = sigma / sigma.max()
         sigma = self._derived["precondition33"]
-        if sigma is None:
-            return None
         return lambda v: self.conv.convolve(sigma, v)
 
     def coarse_normal(self):
@@ -224,6 +252,7 @@ class ContactOperator:
         coarse = object.__new__(ContactOperator)
         coarse.conv = convolver(c1, c2, conv.backend, conv.threads)
         coarse.w1, coarse.w2, coarse.rigid = self.w1, self.w2, False
+        coarse.cell = None if self.cell is None else (2.0 * self.cell[0], 2.0 * self.cell[1])
         coarse.k = {"33": coarse.conv.kernel_spectrum(kernel)}
         coarse._derived = {}
         return coarse
