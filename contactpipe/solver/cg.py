@@ -606,6 +606,12 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             break
         if err < tol:
             break
+    return _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
+
+
+def _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale) -> BoxResult:
+    """The result of :func:`box_cg`: the multipliers fitted to the final free cells, and
+    convergence judged with the force balance."""
     g = Ax + b
     free = (x > lo) & (x < hi)
     if con is None:
