@@ -51,6 +51,9 @@ class Convolver:
     ----------
     forward_count, inverse_count : int
         Transforms executed since construction (or :meth:`reset_counts`).
+    charged : float
+        Work done on other (coarser) grids for this one, in this grid's FFT pairs
+        (:meth:`charge`); part of :attr:`pairs`.
     """
 
     def __init__(self, n1: int, n2: int, backend: str = "auto", threads: int = 1,
@@ -70,6 +73,7 @@ class Convolver:
         self.threads = max(1, int(threads))
         self.forward_count = 0
         self.inverse_count = 0
+        self.charged = 0.0
         t0 = time.perf_counter()
         if backend == "pyfftw":
             with _PLAN_LOCK:
@@ -93,12 +97,19 @@ class Convolver:
     # -- counting -------------------------------------------------------------------
     @property
     def pairs(self) -> float:
-        """FFT pairs spent: (forward + inverse transforms) / 2."""
-        return 0.5 * (self.forward_count + self.inverse_count)
+        """FFT pairs spent: (forward + inverse transforms) / 2, plus the work charged to
+        this grid (:meth:`charge`)."""
+        return 0.5 * (self.forward_count + self.inverse_count) + self.charged
+
+    def charge(self, pairs: float) -> None:
+        """Count work done elsewhere for this grid (a coarse-grid start), already
+        converted to this grid's FFT pairs [1]."""
+        self.charged += float(pairs)
 
     def reset_counts(self) -> None:
         self.forward_count = 0
         self.inverse_count = 0
+        self.charged = 0.0
 
     # -- transforms -----------------------------------------------------------------
     def kernel_spectrum(self, kernel: np.ndarray) -> np.ndarray:

@@ -12,6 +12,21 @@ lo = 0, hi = inf): a force-controlled freedom is a constraint row whose multipli
 rigid motion (ω3, φ1, φ2: the gap is affine in them); a displacement-controlled one is a
 known rigid motion in the linear term. Under force control of W alone with the rotations
 held at zero (:class:`NormalControl` absent) it is the one-row solver of before.
+
+Two accelerations keep the iterations per solve nearly flat as the grid is refined
+(docs/design-choices.md, "Iterations flat in the grid"):
+
+- *preconditioning*: the CG directions come from the gradient filtered by the inverse of
+  the padded K33 circulant (:meth:`ContactOperator.normal_preconditioner`, one more FFT
+  pair per iteration), which undoes the operator's 1/|ξ| smoothing;
+- *a multilevel start* for a cold solve (no warm start): the same problem on the grid
+  coarsened by two (recursively, down to :data:`COARSEST` cells a side), solved to
+  :data:`COARSE_TOL`, prolonged bilinearly as the first iterate. The coarse work is
+  charged to the fine grid's FFT-pair count at the ratio of the cell counts (1/4 per
+  level; the true cost ratio of a transform of a quarter the size is lower).
+
+The fine solve still runs to the caller's tolerance from that start, so the answer is the
+plain solver's to within the tolerance.
 """
 from __future__ import annotations
 
@@ -21,7 +36,15 @@ import numpy as np
 
 from .cg import Constraints, box_cg
 
-__all__ = ["NormalControl", "NormalResult", "solve_normal"]
+__all__ = ["COARSE_TOL", "COARSEST", "NormalControl", "NormalResult", "prolong", "restrict",
+           "solve_normal"]
+
+#: The multilevel start coarsens while every side stays at or above this many cells [1].
+COARSEST = 16
+#: Relative tolerance of the coarse solves of the multilevel start [1] (the caller's where
+#: that is looser): a start needs no more than the coarse grid's own accuracy, and 1e-3 to
+#: 1e-5 cost the same to within 10 % (docs/design-choices.md).
+COARSE_TOL = 1e-3
 
 
 @dataclass
@@ -67,8 +90,59 @@ class NormalControl:
         return X1, X2, L
 
 
+def restrict(a):
+    """The mean of each 2 x 2 block of cells: a field (N1, N2) on the grid coarsened by
+    two (N1, N2 even); a linear field keeps its values at the coarse cell centres."""
+    return 0.25 * (a[0::2, 0::2] + a[1::2, 0::2] + a[0::2, 1::2] + a[1::2, 1::2])
+
+
+def prolong(a):
+    """Cell-centred bilinear interpolation of a coarse pressure (n1, n2) onto the grid
+    refined by two (2 n1, 2 n2): weights 9/16, 3/16, 3/16, 1/16 of the nearest coarse
+    cells, the edge cells continued outwards; zero in the fine cells of a coarse cell
+    without pressure (the start then lies inside the contact: a cell that must join it
+    is released by the CG at no cost, one that must leave it costs a projection and an
+    FFT pair)."""
+    n1, n2 = a.shape
+    e = np.pad(a, 1, mode="edge")
+    out = np.empty((2 * n1, 2 * n2))
+    for i, di in ((0, -1), (1, 1)):
+        for j, dj in ((0, -1), (1, 1)):
+            out[i::2, j::2] = np.where(
+                a > 0.0, (9.0 * a + 3.0 * e[1 + di:n1 + 1 + di, 1:-1]
+                          + 3.0 * e[1:-1, 1 + dj:n2 + 1 + dj]
+                          + e[1 + di:n1 + 1 + di, 1 + dj:n2 + 1 + dj]) / 16.0, 0.0)
+    return out
+
+
+def _coarse_start(op, gap0, W, cell_area, tol, max_iter, control, precondition):
+    """(the first iterate from the solve on the grid coarsened by two, its iterations), or
+    (None, 0) where the grid cannot be coarsened. The coarse FFT pairs are charged to
+    ``op.conv`` at the ratio of the cell counts."""
+    n1, n2 = gap0.shape
+    if n1 % 2 or n2 % 2 or min(n1, n2) < 2 * COARSEST:
+        return None, 0
+    coarse = op.coarse_normal()
+    if coarse is None:
+        return None, 0
+    ctl = None
+    if control is not None:
+        ctl = NormalControl(control.force, control.motion,
+                            0.5 * (control.x1[0::2] + control.x1[1::2]),
+                            0.5 * (control.x2[0::2] + control.x2[1::2]))
+    before = coarse.conv.pairs
+    res = solve_normal(coarse, restrict(gap0), W, 4.0 * cell_area,
+                       np.zeros((n1 // 2, n2 // 2)), max(tol, COARSE_TOL), max_iter,
+                       control=ctl, precondition=precondition)
+    op.conv.charge((coarse.conv.pairs - before) * 0.25)
+    if not np.all(np.isfinite(res.p)):
+        return None, res.iterations
+    return prolong(res.p), res.iterations
+
+
 def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
-                 control: NormalControl | None = None) -> NormalResult:
+                 control: NormalControl | None = None, precondition: bool = True,
+                 multilevel: bool = True) -> NormalResult:
     """Normal problem (Polonsky & Keer 1999), with up to three multipliers.
 
     Parameters
@@ -85,22 +159,38 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
     control : NormalControl, optional
         Force or displacement control of each of (W, M1, M2) / (ω3, φ1, φ2). Absent: W
         force-controlled and the rotations held at zero.
+    precondition : bool
+        Preconditioned CG (the spectral inverse of K33); False: plain Polonsky-Keer.
+    multilevel : bool
+        A cold solve (p0 = 0 everywhere) starts from the solve on the coarsened grid.
 
     Returns
     -------
     NormalResult
-        ``omega3`` and ``phi`` are the multipliers of the force-controlled freedoms and the
+        ``iterations`` counts those of every grid of a multilevel start. ``omega3`` and
+        ``phi`` are the multipliers of the force-controlled freedoms and the
         given values of the others. Under displacement control the contact may open
         entirely: p = 0 everywhere is then the (converged) answer.
     """
     if control is not None and control.legacy:
         W, control = float(control.force[0]), None
-    if control is None:
-        return _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0)
-    if op.rigid:
+    if op.rigid or (control is None and W <= 0.0):
+        if control is None:
+            return _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0)
         # no compliance for this increment: only a force-controlled W has a meaning there
         return NormalResult(np.zeros_like(gap0), np.nan, np.zeros_like(gap0), 0, np.inf,
                             False)
+    fast = {"precondition": op.normal_preconditioner() if precondition else None}
+    coarse_its = 0
+    if multilevel and not np.any(p0):
+        start, coarse_its = _coarse_start(op, gap0, W, cell_area, tol, max_iter, control,
+                                          precondition)
+        if start is not None:
+            p0, Ap0 = start, None
+    if control is None:
+        res = _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0, **fast)
+        res.iterations += coarse_its
+        return res
     X1, X2, L = control.arms()
     force, motion = np.asarray(control.force, float), np.asarray(control.motion, float)
     arms = (np.ones_like(gap0), X2 / L, X1 / L)     # rows of W, M1, M2 (normalised)
@@ -117,15 +207,15 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
             which.append(i)
     con = Constraints(np.array(rows).reshape((len(rows),) + gap0.shape), targets)
     res = box_cg(op.normal, b, np.zeros_like(gap0), np.full_like(gap0, np.inf), con, p0,
-                 tol=tol, max_iter=max_iter, restore="scale", Ax0=Ap0)
+                 tol=tol, max_iter=max_iter, restore="scale", Ax0=Ap0, **fast)
     reached = motion.copy()
     for j, i in enumerate(which):
         reached[i] = res.multiplier[j] / (1.0 if i == 0 else L)
-    return NormalResult(res.x, float(reached[0]), res.Ax, res.iterations, res.residual,
-                        res.converged, phi=reached[1:].copy())
+    return NormalResult(res.x, float(reached[0]), res.Ax, res.iterations + coarse_its,
+                        res.residual, res.converged, phi=reached[1:].copy())
 
 
-def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0):
+def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0, precondition=None):
     """W force-controlled, rotations held at zero (the one-row problem)."""
     if W <= 0.0:
         return NormalResult(np.zeros_like(gap0), float(gap0.min()), np.zeros_like(gap0), 0,
@@ -137,6 +227,7 @@ def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0):
         p = np.where(lowest, W / (cell_area * np.count_nonzero(lowest)), 0.0)
         return NormalResult(p, float(gap0.min()), np.zeros_like(gap0), 0, 0.0, True)
     res = box_cg(op.normal, gap0, np.zeros_like(gap0), np.full_like(gap0, np.inf),
-                 W / cell_area, p0, tol=tol, max_iter=max_iter, restore="scale", Ax0=Ap0)
+                 W / cell_area, p0, tol=tol, max_iter=max_iter, restore="scale", Ax0=Ap0,
+                 precondition=precondition)
     return NormalResult(res.x, res.multiplier, res.Ax, res.iterations, res.residual,
                         res.converged)

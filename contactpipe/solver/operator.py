@@ -15,6 +15,7 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
+import scipy.fft
 
 from .convolution import Convolver
 from .influence import body_kernel_parts, body_kernels, pair_kernels
@@ -24,20 +25,36 @@ __all__ = ["BodySpectra", "ContactOperator", "body_spectra", "body_spectra_parts
 
 
 class BodySpectra(dict):
-    """Kernel spectra (scaled for the inverse FFT) of one body on one grid: key 'ij'."""
+    """Kernel spectra (scaled for the inverse FFT) of one body on one grid: key 'ij'.
+
+    Attributes
+    ----------
+    cell : tuple of float or None
+        The cell sides (Δ1, Δ2) [m] of the grid, where known.
+    """
+
+    cell = None
+
+    @classmethod
+    def on(cls, spectra, cell):
+        """The spectra (a dict) with the cell sides of their grid."""
+        out = cls(spectra)
+        out.cell = None if cell is None else (float(cell[0]), float(cell[1]))
+        return out
 
 
 @lru_cache(maxsize=16)
 def _body_spectra_cached(n1, n2, d1, d2, young, poisson, backend, threads):
     conv = convolver(n1, n2, backend, threads)
     kernels = body_kernels(n1, n2, d1, d2, young, poisson)
-    return BodySpectra({k: conv.kernel_spectrum(v) for k, v in kernels.items()})
+    return BodySpectra.on({k: conv.kernel_spectrum(v) for k, v in kernels.items()}, (d1, d2))
 
 
 @lru_cache(maxsize=8)
 def _part_spectra_cached(n1, n2, d1, d2, shear_modulus, backend, threads):
     conv = convolver(n1, n2, backend, threads)
-    return tuple(BodySpectra({k: conv.kernel_spectrum(v) for k, v in part.items()})
+    return tuple(BodySpectra.on({k: conv.kernel_spectrum(v) for k, v in part.items()},
+                                (d1, d2))
                  for part in body_kernel_parts(n1, n2, d1, d2, shear_modulus))
 
 
@@ -89,8 +106,8 @@ def weighted_spectra(parts, weights):
         return None, 0.0
     if len(parts) == 1:
         return parts[0], w[0]
-    total = BodySpectra({key: sum(wj * part[key] for wj, part in zip(w, parts) if wj != 0.0)
-                         for key in parts[0]})
+    total = BodySpectra.on({key: sum(wj * part[key] for wj, part in zip(w, parts) if wj != 0.0)
+                            for key in parts[0]}, parts[0].cell)
     return total, 1.0
 
 
@@ -117,6 +134,8 @@ class ContactOperator:
         s2, c2 = weighted_spectra(spectra2, self.w2)
         self.rigid = s1 is None and s2 is None
         self.k = pair_kernels(s1, s2, c1, c2) if not self.rigid else None
+        #: the cell sides (Δ1, Δ2) [m] where the spectra know them, else None
+        self.cell = next((getattr(x, "cell", None) for x in (s1, s2) if x is not None), None)
         self._derived = {}          # constants derived from the spectra, computed once
 
     # -- the pieces the inner problems need -------------------------------------------
@@ -175,6 +194,68 @@ class ContactOperator:
                 value = float(np.max(0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + c ** 2)))
             self._derived[key] = value
         return self._derived[key]
+
+    def normal_preconditioner(self):
+        """``M(v)``: v filtered by the symbol of (−Δ)^½, the discrete square root of the
+        negative Laplacian on the padded grid (one FFT pair), an approximation of the
+        normal operator's inverse (K33 behaves as 1/|ξ|) for preconditioned CG (cached).
+
+        The symbol is sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the padded grid's
+        angular frequencies, with the zero mode set to the smallest other value (M is then
+        symmetric positive definite; its scale does not matter to CG). Not the inverse of
+        the padded K33 circulant itself: with rectangular cells that circulant has
+        negative modes, and even clipped to positive it made a worse preconditioner
+        (docs/design-choices.md). Cells of unknown sides are taken square.
+        """
+        if "precondition33" not in self._derived:
+            conv = self.conv
+            d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
+            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.m1)[:, None]
+            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.m2)[None, :]
+            sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
+                            + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
+            sigma[0, 0] = sigma[sigma > 0].min()
+            self._derived["precondition33"] = sigma / sigma.max()
+        sigma = self._derived["precondition33"]
+        return lambda v: self.conv.convolve(sigma, v)
+
+    def coarse_normal(self):
+        """The normal operator on the grid coarsened by two in each direction (cached), or
+        None where a side is odd.
+
+        Galerkin coarsening: a coarse cell carries a uniform pressure over its 2 x 2 fine
+        cells and its displacement is their mean, so the coarse kernel is
+        K_c(D) = Σ_e w_e K(2D + e), e in {-1, 0, 1}², w_e = (2 - |e1|)(2 - |e2|)/4, read
+        from the fine kernel (one inverse real FFT of its spectrum, once per operator: set-up
+        work, like the kernel spectra, not counted in FFT pairs). Only ``normal`` (K33) is
+        available on the result; its FFT pairs are counted by the coarse grid's own
+        :func:`convolver`.
+        """
+        if "coarse" not in self._derived:
+            self._derived["coarse"] = self._coarsened()
+        return self._derived["coarse"]
+
+    def _coarsened(self):
+        conv = self.conv
+        if conv.n1 % 2 or conv.n2 % 2:
+            return None
+        c1, c2 = conv.n1 // 2, conv.n2 // 2
+        fine = scipy.fft.irfft2(self.k["33"] * (conv.m1 * conv.m2), s=(conv.m1, conv.m2))
+        d1, d2 = np.arange(-(c1 - 1), c1), np.arange(-(c2 - 1), c2)
+        acc = np.zeros((d1.size, d2.size))
+        for e1 in (-1, 0, 1):
+            for e2 in (-1, 0, 1):
+                w = (2 - abs(e1)) * (2 - abs(e2)) / 4.0
+                acc += w * fine[np.ix_((2 * d1 + e1) % conv.m1, (2 * d2 + e2) % conv.m2)]
+        kernel = np.zeros((2 * c1, 2 * c2))
+        kernel[np.ix_(d1 % (2 * c1), d2 % (2 * c2))] = acc
+        coarse = object.__new__(ContactOperator)
+        coarse.conv = convolver(c1, c2, conv.backend, conv.threads)
+        coarse.w1, coarse.w2, coarse.rigid = self.w1, self.w2, False
+        coarse.cell = None if self.cell is None else (2.0 * self.cell[0], 2.0 * self.cell[1])
+        coarse.k = {"33": coarse.conv.kernel_spectrum(kernel)}
+        coarse._derived = {}
+        return coarse
 
     def full(self, p, q1=None, q2=None):
         """(u1, u2, u3) [m] from all tractions (3 forward, 3 inverse transforms at most)."""
