@@ -60,7 +60,7 @@ STICK_MARGIN = 1e-9
 SCALE_RANGE = (1e-150, 1e150)
 #: Tolerance of a frictional preload's intermediate sub-steps, as a fraction of the
 #: path's error target (:meth:`_Problem.limits_of`) [1].
-PATH_TOLERANCE = 1e-4
+PATH_TOLERANCE = 1e-5
 
 
 class ResumeLockedError(LockedError):
