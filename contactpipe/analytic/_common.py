@@ -110,3 +110,56 @@ def cell_average(f, x1, x2, d1, d2, order: int = 8, radial: bool = False):
 
 def sqrt_plus(c, r):
     return np.sqrt(np.clip(c * c - r * r, 0.0, None))
+
+
+def masing_loop(history, virgin, slide=None) -> np.ndarray:
+    """A force (or moment) at every sample of a displacement (or rotation) history by
+    Masing's rules on a virgin curve, from rest at 0.
+
+    From the last remembered reversal (x_r, F_r) the branch is
+    ``F = F_r + s 2 virgin(|x − x_r| / 2)`` (s the direction); a branch that reaches the
+    one it left wipes both reversals, and one that passes the mirror of the first reversal
+    rejoins the virgin curve about the current centre.
+
+    Parameters
+    ----------
+    history : array_like
+        Displacement samples x, linear between samples.
+    virgin : callable
+        ``virgin(x) -> F``, odd in x: the virgin curve.
+    slide : (float, float), optional
+        (F_s, x_s): where |F| reaches F_s the contact slides as a whole: F stays at s F_s,
+        every memory is erased and the state is the virgin curve's at x_s about the new
+        centre ``x − s x_s``. None: the curve never reaches sliding.
+
+    Returns
+    -------
+    ndarray
+        F at each sample.
+    """
+    centre, stack, F, prev, direction = 0.0, [], 0.0, 0.0, 0
+    out = []
+    for x in np.atleast_1d(np.asarray(history, float)).ravel():
+        x = float(x)
+        if x != prev:
+            s = 1 if x > prev else -1
+            if direction and s != direction:
+                stack.append((prev, F))
+            direction = s
+            while True:
+                if len(stack) >= 2 and s * (x - stack[-2][0]) >= 0.0:
+                    del stack[-2:]
+                elif len(stack) == 1 and s * (x - (2.0 * centre - stack[0][0])) >= 0.0:
+                    stack.pop()
+                else:
+                    break
+            if stack:
+                x_r, F_r = stack[-1]
+                F = F_r + s * 2.0 * float(virgin(abs(x - x_r) / 2.0))
+            else:
+                F = float(virgin(x - centre))
+            if slide is not None and abs(F) >= slide[0]:
+                F, stack, centre = s * slide[0], [], x - s * slide[1]
+            prev = x
+        out.append(F)
+    return np.array(out)

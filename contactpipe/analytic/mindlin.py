@@ -14,7 +14,7 @@ import numpy as np
 from scipy import special
 
 from ..exceptions import GrossSlidingError
-from ._common import sqrt_plus
+from ._common import masing_loop, sqrt_plus
 
 #: Fouvry's energy ratio A = E / (4 T* delta*) at the partial / gross slip transition of a
 #: sphere on a plane; :func:`energy_ratio` gives exactly this value at delta* = delta_gs.
@@ -447,32 +447,7 @@ def displacement_loop_force(history, friction_coefficient, normal_force, contact
     mu_w = friction_coefficient * normal_force
     d_gs = gross_slip_displacement(friction_coefficient, normal_force, contact_radius,
                                    compliance_sum)
-    centre, stack, T, prev, direction = 0.0, [], 0.0, 0.0, 0
-    out = []
-    for d in np.atleast_1d(np.asarray(history, float)).ravel():
-        d = float(d)
-        if d != prev:
-            s = 1 if d > prev else -1
-            if direction and s != direction:
-                stack.append((prev, T))
-            direction = s
-            while True:
-                if len(stack) >= 2 and s * (d - stack[-2][0]) >= 0.0:
-                    del stack[-2:]
-                elif len(stack) == 1 and s * (d - (2.0 * centre - stack[0][0])) >= 0.0:
-                    stack.pop()
-                else:
-                    break
-            if stack:
-                d_r, T_r = stack[-1]
-                T = T_r + s * 2.0 * float(_virgin_force(abs(d - d_r) / 2.0, mu_w, d_gs))
-            else:
-                T = float(_virgin_force(d - centre, mu_w, d_gs))
-            if abs(T) >= mu_w:                      # the contact slides as a whole
-                T, stack, centre = s * mu_w, [], d - s * d_gs
-            prev = d
-        out.append(T)
-    return np.array(out)
+    return masing_loop(history, lambda d: _virgin_force(d, mu_w, d_gs), slide=(mu_w, d_gs))
 
 
 def displacement_energy_per_cycle(amplitude, friction_coefficient, normal_force,

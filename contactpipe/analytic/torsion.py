@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import integrate, optimize, special
 
-from ._common import check_positive
+from ._common import check_positive, masing_loop
 
 __all__ = ["torsional_compliance", "torsional_stiffness", "full_slip_torque",
            "lubkin_torsion", "lubkin_moment", "torsion_loop_moment"]
@@ -175,27 +175,4 @@ def torsion_loop_moment(history, friction_coefficient, normal_force, contact_rad
         return float(lubkin_moment(b, friction_coefficient, normal_force, contact_radius,
                                    compliance))
 
-    stack, M, prev, direction = [], 0.0, 0.0, 0
-    out = []
-    for b in np.atleast_1d(np.asarray(history, float)).ravel():
-        b = float(b)
-        if b != prev:
-            s = 1 if b > prev else -1
-            if direction and s != direction:
-                stack.append((prev, M))
-            direction = s
-            while True:
-                if len(stack) >= 2 and s * (b - stack[-2][0]) >= 0.0:
-                    del stack[-2:]
-                elif len(stack) == 1 and s * (b + stack[0][0]) >= 0.0:
-                    stack.pop()
-                else:
-                    break
-            if stack:
-                b_r, m_r = stack[-1]
-                M = m_r + s * 2.0 * virgin(abs(b - b_r) / 2.0)
-            else:
-                M = virgin(b)
-            prev = b
-        out.append(M)
-    return np.array(out)
+    return masing_loop(history, virgin)
