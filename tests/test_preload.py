@@ -106,21 +106,18 @@ def test_choose_preload_bookkeeping():
     assert preload_error(None, path(4), 2, 4, 8, 1.0) is None
 
 
-def test_loose_stations_of_the_path(monkeypatch):
-    """The intermediate sub-steps and the estimate's coarser paths are solved to
-    PATH_TOLERANCE of the path's error target (1e-5 x 1 % = 1e-7 here, not 1e-10): the
-    first instant's fields stay within 2e-6 mu p_max of the path solved tightly at every
-    station (measured 1.6e-7 for q, 1.7e-9 p_max for p; 1000 times below the path's own
-    error, 1.36 % at 8 sub-steps), the recorded estimate within 1e-4 of it, and the first
-    instant and the estimate cost fewer FFT pairs (measured 1074 -> 832 and 855 -> 617)."""
+def test_loose_coarser_paths_of_the_estimate(monkeypatch):
+    """The estimate's coarser paths are solved to PATH_TOLERANCE of the path's error
+    target (1e-5 x 1 % = 1e-7 here, not 1e-10); the run's own path keeps the full
+    tolerance at every station: its fields are those of a run whose estimate is solved
+    tightly, bit for bit; the recorded estimate moves by less than 1e-6 (measured 3.5e-9)
+    and costs fewer FFT pairs (measured 855 -> 617)."""
     loose = cp.simulate(scene(8))
     monkeypatch.setattr(simulation, "PATH_TOLERANCE", 0.0)     # every station at 1e-10
     tight = cp.simulate(scene(8))
-    p_max = float(tight.p.values[0].max())
-    dq = np.abs(first_q(loose) - first_q(tight)).max() / (MU * p_max)
-    dp = np.abs(loose.p.values[0] - tight.p.values[0]).max() / p_max
-    assert dq < 2e-6 and dp < 2e-6, (dq, dp)
+    np.testing.assert_array_equal(first_q(loose), first_q(tight))
+    np.testing.assert_array_equal(loose.p.values, tight.p.values)
+    assert loose.fft_pairs.values[0] == tight.fft_pairs.values[0]
     assert abs(loose.attrs["preload_error_estimate"]
-               - tight.attrs["preload_error_estimate"]) < 1e-4
-    assert loose.fft_pairs.values[0] < tight.fft_pairs.values[0]
+               - tight.attrs["preload_error_estimate"]) < 1e-6
     assert loose.attrs["preload_estimate_fft_pairs"] < tight.attrs["preload_estimate_fft_pairs"]
