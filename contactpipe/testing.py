@@ -23,10 +23,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import analytic
 from .loading import FREEDOMS
+from .materials import kelvin_voigt, maxwell, prony, zener
 from .scene import Scene
 
-__all__ = ["contact_law_violations", "assert_contact_laws", "tiny_scene", "TINY_SCENES"]
+__all__ = ["contact_law_violations", "assert_contact_laws", "tiny_scene", "TINY_SCENES",
+           "creep_laws", "zigzag", "lee_radok_measures"]
 
 #: Two tiny scenes (24 x 24 cells, a rigid sphere on a compressible Maxwell half-space):
 #: "creep" is frictionless under a constant load; "fretting" runs every sub-model
@@ -226,3 +229,96 @@ def assert_contact_laws(ds, rtol=1e-9, rtol_coulomb=1e-9) -> None:
     """Raise AssertionError listing every violated contact law of the archive."""
     bad = contact_law_violations(ds, rtol=rtol, rtol_coulomb=rtol_coulomb)
     assert not bad, "contact laws violated:\n  " + "\n  ".join(bad)
+
+
+# ------------------------------------------------------- viscoelastic fields vs Lee-Radok
+
+def creep_laws(young: float) -> dict:
+    """The creep laws of the time-integration checks (every time constant 1 s): name ->
+    (the body's scene keys, its creep function phi(t) [1]). Maxwell; Zener with
+    E0/Einf = 2 and 100; Kelvin-Voigt (``young`` then the long-term modulus); a 3-term
+    Prony series with a dashpot of 10 s. ``young`` [Pa] is the body's Young modulus."""
+    terms = [[0.5, 0.1], [1.0, 1.0], [2.0, 5.0]]
+    return {
+        "maxwell": ({"creep": "maxwell", "relaxation_time": 1.0}, maxwell(1.0)),
+        "zener2": ({"creep": "zener", "relaxed_young": young / 2, "retardation_time": 1.0},
+                   zener(young, young / 2, 1.0)),
+        "zener100": ({"creep": "zener", "relaxed_young": young / 100,
+                      "retardation_time": 1.0}, zener(young, young / 100, 1.0)),
+        "kelvin_voigt": ({"creep": "kelvin_voigt", "retardation_time": 1.0},
+                         kelvin_voigt(1.0)),
+        "prony3": ({"creep": "prony", "terms": terms, "relaxation_time": 10.0},
+                   prony(terms, 10.0)),
+    }
+
+
+def zigzag(pc) -> float:
+    """Step-to-step oscillation of a series: the largest min(|D_k|, |D_k+1|, |D_k+2|) over
+    three consecutive increments D of ``pc`` that alternate in sign (0 when none do; a
+    monotone relaxation, or one jump, gives 0)."""
+    d = np.diff(np.asarray(pc, float))
+    amp = [min(abs(d[k]), abs(d[k + 1]), abs(d[k + 2])) for k in range(len(d) - 2)
+           if d[k] * d[k + 1] < 0 and d[k + 1] * d[k + 2] < 0]
+    return max(amp, default=0.0)
+
+
+def lee_radok_measures(ds, creep, young, poisson, radius, normal_force, *, t_min=0.25,
+                       t_field=None, field_every=1, n_steps=1000) -> dict:
+    """How a rigid sphere's viscoelastic run (W stepped at the first instant, square grid)
+    meets Lee-Radok (:func:`contactpipe.analytic.lee_radok_sphere`, ``lee_radok_pressure``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The archive (p, contact_area, omega3 over time; x1, x2).
+    creep : callable
+        The normal creep function phi(t) [1] Lee-Radok is evaluated with.
+    young, poisson, radius, normal_force : float
+        E [Pa], nu [1], R [m], W [N].
+    t_min : float
+        The radius and a³ are compared for t >= t_min [s].
+    t_field : float, optional
+        The pressure field is compared for t >= t_field [s] (every ``field_every``-th such
+        instant); absent: not compared.
+    n_steps : int
+        Quadrature steps of ``lee_radok_pressure``.
+
+    Returns
+    -------
+    dict
+        ``radius_cells``: largest |a_area − a| over the cell side, a_area = sqrt(area/π);
+        ``holes``: the most cells with p = 0 inside 0.8 a(t) at one instant after the
+        first; ``zigzag``: :func:`zigzag` of the centre pressure p_c (mean of the four centre
+        cells) after the first instant, over its final value; ``a3``: largest
+        |(R ω3)^{3/2} / a³ − 1|; ``field`` (with ``t_field``): largest |p − p_LR| inside
+        0.8 a over Lee-Radok's centre pressure; ``pc``, ``t``, ``a_exact`` [m].
+    """
+    E, nu, R, W = young, poisson, radius, normal_force
+    t = ds.time.values
+    x = ds.x1.values
+    d = float(x[1] - x[0])
+    r = np.hypot(*np.meshgrid(x, ds.x2.values, indexing="ij"))
+    a_ex = analytic.lee_radok_sphere(t, W, R, E, nu, creep).contact_radius
+    a_area = np.sqrt(ds.contact_area.values / np.pi)
+    p = ds.p.values
+    n1, n2 = p.shape[1:]
+    pc = p[:, n1 // 2 - 1:n1 // 2 + 1, n2 // 2 - 1:n2 // 2 + 1].mean(axis=(1, 2))
+    late = t >= t_min
+    a3 = (R * np.clip(ds.omega3.values, 0, None)) ** 1.5
+    out = {"radius_cells": float(np.abs(a_area[late] - a_ex[late]).max() / d),
+           "holes": max(int(np.sum((p[k] == 0) & (r < 0.8 * a_ex[k])))
+                        for k in range(1, t.size)),
+           "zigzag": zigzag(pc[1:]) / max(pc[-1], 1e-300),
+           "a3": float(np.abs(a3[late] / a_ex[late] ** 3 - 1).max()),
+           "pc": pc, "t": t, "a_exact": a_ex}
+    if t_field is not None:
+        err = 0.0
+        for k in np.flatnonzero(t >= t_field)[::field_every]:
+            inside = r < 0.8 * a_ex[k]
+            ref = analytic.lee_radok_pressure(r[inside], t[k], W, R, E, nu, creep,
+                                              n_steps=n_steps)
+            centre = float(analytic.lee_radok_pressure(np.array([0.0]), t[k], W, R, E, nu,
+                                                       creep, n_steps=n_steps)[0])
+            err = max(err, float(np.abs(p[k][inside] - ref).max() / centre))
+        out["field"] = err
+    return out

@@ -66,21 +66,12 @@ import matplotlib.pyplot as plt
 import contactpipe as cp
 import contactpipe.simulation as simulation_module
 from contactpipe import analytic as an
-from contactpipe.materials import kelvin_voigt, maxwell, prony, step_start_stable_step, zener
+from contactpipe.materials import step_start_stable_step
 from contactpipe.solver import memory as mem
+from contactpipe.testing import creep_laws, lee_radok_measures
 
 E, NU, R, W = c.E_GLASSY, c.NU_STEEL, c.R, c.W
-PRONY3 = [[0.5, 0.1], [1.0, 1.0], [2.0, 5.0]]
-LAWS = {
-    "maxwell": ({"creep": "maxwell", "relaxation_time": 1.0}, maxwell(1.0)),
-    "zener2": ({"creep": "zener", "relaxed_young": E / 2, "retardation_time": 1.0},
-               zener(E, E / 2, 1.0)),
-    "zener100": ({"creep": "zener", "relaxed_young": E / 100, "retardation_time": 1.0},
-                 zener(E, E / 100, 1.0)),
-    "kelvin_voigt": ({"creep": "kelvin_voigt", "retardation_time": 1.0}, kelvin_voigt(1.0)),
-    "prony3": ({"creep": "prony", "terms": PRONY3, "relaxation_time": 10.0},
-               prony(PRONY3, 10.0)),
-}
+LAWS = creep_laws(E)
 RULES = ("bdf2", "linear", "step_start")
 CANDIDATES = ("auto", "bdf2", "bdf2_plain", "bdf2_1start", "linear", "linear_ds", "step_start")
 
@@ -244,37 +235,12 @@ def lee_radok_p(law, r, t, creep=None):
                                  LAWS[law][1] if creep is None else creep, n_steps=1000)
 
 
-def zigzag(pc):
-    """Largest min(|D_k|, |D_k+1|, |D_k+2|) of three alternating increments D of pc."""
-    d = np.diff(pc)
-    amp = [min(abs(d[k]), abs(d[k + 1]), abs(d[k + 2])) for k in range(len(d) - 2)
-           if d[k] * d[k + 1] < 0 and d[k + 1] * d[k + 2] < 0]
-    return max(amp, default=0.0)
-
-
 def step_load_measures(ds, law, t_min=0.25, t_field=0.5, creep=None):
-    t = ds.time.values
-    x = ds.x1.values
-    d = float(x[1] - x[0])
-    r = np.hypot(*np.meshgrid(x, x, indexing="ij"))
-    creep = LAWS[law][1] if creep is None else creep
-    a_ex = an.lee_radok_sphere(t, W, R, E, NU, creep).contact_radius
-    a_area = np.sqrt(ds.contact_area.values / np.pi)
-    p = ds.p.values
-    n = p.shape[1]
-    pc = p[:, n // 2 - 1:n // 2 + 1, n // 2 - 1:n // 2 + 1].mean(axis=(1, 2))
-    late = t >= t_min
-    field = 0.0
-    for k in np.flatnonzero(t >= t_field):
-        inside = r < 0.8 * a_ex[k]
-        centre = float(lee_radok_p(law, np.array([0.0]), t[k], creep)[0])
-        ref = lee_radok_p(law, r[inside], t[k], creep)
-        field = max(field, float(np.abs(p[k][inside] - ref).max() / centre))
-    a3 = (R * np.clip(ds.omega3.values, 0, None)) ** 1.5
-    return {"radius_cells": float(np.abs(a_area[late] - a_ex[late]).max() / d),
-            "holes": max(int(np.sum((p[k] == 0) & (r < 0.8 * a_ex[k]))) for k in range(1, t.size)),
-            "zigzag": zigzag(pc[1:]) / max(pc[-1], 1e-300), "field": field,
-            "a3": float(np.abs(a3[late] / a_ex[late] ** 3 - 1).max()), "pc": pc, "t": t}
+    """Radius (cells), holes, zigzag, field and a³ against Lee-Radok
+    (:func:`contactpipe.testing.lee_radok_measures`), with the law's creep function or
+    ``creep`` (the normal compliance of a varying nu)."""
+    return lee_radok_measures(ds, LAWS[law][1] if creep is None else creep, E, NU, R, W,
+                              t_min=t_min, t_field=t_field)
 
 
 QUICK_CANDIDATES = ("auto", "bdf2", "linear")

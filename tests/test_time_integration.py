@@ -26,19 +26,10 @@ from contactpipe.materials import (ExponentialCreep, TabulatedCreep, kelvin_voig
 from contactpipe.solver.memory import (DirectMemory, RecursiveMemory, error_amplification,
                                        fitted_bdf2_coefficients, is_monotone, make_memory,
                                        resolve_rule)
+from contactpipe.testing import creep_laws, lee_radok_measures, zigzag
 
 R, W, E, NU = 0.018, 1000.0, 105e9, 0.3
-PRONY3 = [[0.5, 0.1], [1.0, 1.0], [2.0, 5.0]]
-LAWS = {
-    "maxwell": ({"creep": "maxwell", "relaxation_time": 1.0}, maxwell(1.0)),
-    "zener2": ({"creep": "zener", "relaxed_young": E / 2, "retardation_time": 1.0},
-               zener(E, E / 2, 1.0)),
-    "zener100": ({"creep": "zener", "relaxed_young": E / 100, "retardation_time": 1.0},
-                 zener(E, E / 100, 1.0)),
-    "kelvin_voigt": ({"creep": "kelvin_voigt", "retardation_time": 1.0}, kelvin_voigt(1.0)),
-    "prony3": ({"creep": "prony", "terms": PRONY3, "relaxation_time": 10.0},
-               prony(PRONY3, 10.0)),
-}
+LAWS = creep_laws(E)
 CREEPS = {name: creep for name, (_, creep) in LAWS.items()}
 CREEPS["burgers"] = prony([[3.0, 1.0]], 0.5)
 CREEPS["zener1e4"] = zener(1e4, 1.0, 1.0)
@@ -79,39 +70,9 @@ def lee_radok_p(law, r, t):
     return an.lee_radok_pressure(r, t, W, R, E, NU, CREEPS[law], n_steps=1000)
 
 
-def zigzag(pc):
-    d = np.diff(pc)
-    amp = [min(abs(d[k]), abs(d[k + 1]), abs(d[k + 2])) for k in range(len(d) - 2)
-           if d[k] * d[k + 1] < 0 and d[k + 1] * d[k + 2] < 0]
-    return max(amp, default=0.0)
-
-
 def field_measures(ds, law, t_min=0.25, t_field=None):
     """Radius (cells), holes, zigzag and the pressure-field error of a step-load run."""
-    t = ds.time.values
-    x = ds.x1.values
-    d = float(x[1] - x[0])
-    X, Y = np.meshgrid(x, x, indexing="ij")
-    r = np.hypot(X, Y)
-    a_ex = an.lee_radok_sphere(t, W, R, E, NU, CREEPS[law]).contact_radius
-    a_area = np.sqrt(ds.contact_area.values / np.pi)
-    p = ds.p.values
-    n = p.shape[1]
-    late = t >= t_min
-    pc = p[:, n // 2 - 1:n // 2 + 1, n // 2 - 1:n // 2 + 1].mean(axis=(1, 2))
-    out = {"radius_cells": float(np.abs(a_area[late] - a_ex[late]).max() / d),
-           "holes": max(int(np.sum((p[k] == 0) & (r < 0.8 * a_ex[k])))
-                        for k in range(1, t.size)),
-           "zigzag": zigzag(pc[1:]) / max(pc[-1], 1e-300)}
-    if t_field is not None:
-        err = 0.0
-        for k in np.flatnonzero(t >= t_field):
-            inside = r < 0.8 * a_ex[k]
-            ref = lee_radok_p(law, r[inside], t[k])
-            centre = float(lee_radok_p(law, np.array([0.0]), t[k])[0])
-            err = max(err, float(np.abs(p[k][inside] - ref).max() / centre))
-        out["field"] = err
-    return out
+    return lee_radok_measures(ds, CREEPS[law], E, NU, R, W, t_min=t_min, t_field=t_field)
 
 
 # --------------------------------------------------------------------------- the scheme
