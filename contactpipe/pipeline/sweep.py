@@ -23,14 +23,10 @@ Axes
 ----
 An axis name is either a dotted path into the scene (``"friction.mu"``,
 ``"load.normal_force"``, ``"halfspace.relaxation_time"``, ``"time.steps"``; see
-:meth:`Scene.replace`) or a *derived parameter* registered by name. Built in:
-
-``tau_ratio``
-    The load window tau = ``tau_ratio`` x the relaxation time of the first viscoelastic
-    body that has one (indenter first): ``relaxation_time`` of a Maxwell body (or of a
-    Prony body's dashpot), ``retardation_time`` of a Zener or Kelvin-Voigt body. The load
-    knots are stretched proportionally from ``time[0]`` (or ``load.fretting.window`` is
-    set), so the shape of the program and the number of steps stay the same.
+:meth:`Scene.replace`) or a *derived parameter* registered by name: ``tau_ratio`` (the
+load window as a multiple of the relaxation time), ``delta_amplitude`` and ``delta_ratio``
+(the amplitude of a displacement-controlled tangential program, in metres or over the
+gross-slip displacement); each is documented in :mod:`contactpipe.pipeline.parameters`.
 
 Users register their own with :func:`register_parameter`, or give an axis as
 ``(values, func)`` for an ad-hoc one; ``func(scene, value)`` returns the new
