@@ -73,7 +73,8 @@ def _infeasible(x, con, target, scale, tol) -> bool:
     return float(np.abs(con.residual(x)).max(initial=0.0)) / scale >= tol
 
 
-def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
+def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
+                 precondition=True):
     """Cattaneo-Mindlin form (q2 = 0).
 
     Parameters
@@ -89,7 +90,16 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
         Tangential force [N]; None under displacement control (no force row: the
         returned ``domega`` is then 0, the caller knows the shift).
     q0 : ndarray
-        Warm start for q1 [Pa].
+        Warm start for q1 [Pa]. A slip cell should sit exactly on its bound
+        (:func:`contactpipe.solver.coupling.follow_bound`): one rounded inside counts as
+        stick, and the preconditioned direction, which is not local, then carries the
+        whole field off before the projection puts it back.
+    precondition : bool
+        Preconditioned CG with the (−Δ)^½ filter of the normal solve
+        (:meth:`ContactOperator.normal_preconditioner`; K11, like K33, behaves as 1/|ξ|):
+        two FFT pairs per iteration instead of one, in about half the iterations at 128²
+        and fewer still on finer grids (docs/design-choices.md). False, or an operator
+        without the filter: plain CG.
 
     Notes
     -----
@@ -98,11 +108,13 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None):
     """
     scale = max(float(bound.sum()), 1e-300)
     con = Constraints.none(b1.shape) if T1 is None else None
+    make = getattr(op, "normal_preconditioner", None) if precondition else None
+    M = make() if make is not None else None
     target = con if con is not None else T1 / cell_area
 
     def cg(x0, Ax0, tol_, budget):
         r = box_cg(op.tangential_scalar, b1, -bound, bound, target, x0, tol=tol_,
-                   max_iter=budget, restore="shift", scale=scale, Ax0=Ax0)
+                   max_iter=budget, restore="shift", scale=scale, Ax0=Ax0, precondition=M)
         return r.x, r.Ax, r.iterations, r.residual, r.converged
 
     def pg(x0, Ax0, tol_, budget):
