@@ -48,7 +48,7 @@ import numpy as np
 #: step, kept where it ascends) up to the last (a gradient step, which always ascends) [1].
 DAMPING = (1e-12, 1e4)
 
-__all__ = ["BoxResult", "Constraints", "box_cg", "fista", "project_box_sum",
+__all__ = ["BlockSums", "BoxResult", "Constraints", "box_cg", "fista", "project_box_sum",
            "project_rows", "box_jacobian", "box_project", "disk_jacobian", "disk_project"]
 
 
@@ -140,6 +140,47 @@ class Constraints:
         lead = z.shape[:-2]
         out[..., cells] -= (mu @ Cw).reshape(lead + (-1,))
         return out
+
+
+class BlockSums(Constraints):
+    """Force rows over the blocks of a stacked unknown x (m, N1, N2): Σ x[k] = f[k], one row
+    per block, each with its own cells. The cell masks are then masks of x's whole shape
+    (a pressure cell and a shear cell of one grid point may be free apart), unlike
+    :class:`Constraints`, whose masks are over the grid. The rows are restored after a
+    projection by a clipped shift of each block's free cells, as the one-row solver does.
+
+    Used by the joint solve of a coupled instant (:mod:`contactpipe.solver.joint`): the
+    pressure carries W, the shear T1, and the multipliers are (ω3, Δω1).
+    """
+
+    def __init__(self, target):
+        self.target = np.atleast_1d(np.asarray(target, dtype=float))
+        self.m = int(self.target.size)
+        self.sums = True
+        self.rows = None
+
+    def field(self, lam):
+        return np.asarray(lam, dtype=float).reshape(self.m, 1, 1)
+
+    def sums_of(self, x):
+        return x.reshape(self.m, -1).sum(axis=1)
+
+    def fit(self, g, cells):
+        return np.array([float(g[k][cells[k]].mean()) if cells[k].any() else 0.0
+                         for k in range(self.m)])
+
+    def keep(self, z, cells):
+        out = z.copy()
+        for k in range(self.m):
+            if cells[k].any():
+                out[k][cells[k]] -= float(z[k][cells[k]].sum()) / np.count_nonzero(cells[k])
+        return out
+
+    def restore(self, x, lo, hi, free):
+        """Σ x[k] = f[k] again by a clipped shift of block k's free cells (then of every
+        cell with room)."""
+        return np.stack([_restore_by_shift(x[k], lo[k], hi[k], self.target[k], free[k])
+                         for k in range(self.m)])
 
 
 # --------------------------------------------------------------------------- projections
@@ -390,6 +431,8 @@ def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0):
 def _restore_rows(x, lo, hi, con, free, movable):
     """The constraint rows restored by projecting the free cells (then, when they cannot
     carry them, every movable cell) onto {bounds, C x = f}."""
+    if isinstance(con, BlockSums):
+        return con.restore(x, lo, hi, free)
     out = x
     for cells in (free, movable):
         if not cells.any():

@@ -1,0 +1,127 @@
+"""One conjugate-gradient solve over (p, q1) for a coupled instant (the scalar form).
+
+Block Gauss-Seidel (:func:`contactpipe.solver.coupling.solve_instant`) lags two things
+from pass to pass: the coupling displacements (u3 from q through K31, u1 from p through
+K13) and the friction bound μp. The coupling terms are linear and symmetric (reciprocity:
+⟨p, K31 ⊛ q⟩ = ⟨q, K13 ⊛ p⟩), so with the bound held the instant is one bound-constrained
+quadratic problem over the stacked tractions x = (p, q1),
+
+    minimise  ½ xᵀ A x + bᵀ x,   A = [[K33, K31], [K13, K11]],   b = (hi + U3, U1 − u1(k−1)),
+    subject to  p ≥ 0,  −g ≤ q1 ≤ g,  Σp = W/Δ,  Σq1 = T1/Δ,
+
+whose optimality conditions are the contact laws of both problems at once (closed gap
+under pressure; no slip increment in stick, a slip increment against the shear on the
+bound), with multipliers (ω3, Δω1). :func:`contactpipe.solver.cg.box_cg` solves it with
+the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and the (−Δ)^½ filter on
+each block as preconditioner: one operator application is two FFT pairs (two forward
+transforms, four kernel products, two inverse), the preconditioner two more.
+
+Only the bound g = μp is then lagged. A pass moves the slip cells' shear by μ δp and the
+pressure answers through K31 only, so a pass cuts the pressure change by about μβ
+(measured about 1/100 with exact inner solves, steel on aluminium); block Gauss-Seidel
+cuts it by β²-like factors of 1/20-1/50. Inner tolerances follow the same inexact
+schedule as the block Gauss-Seidel passes. The caller finishes with one tangential solve
+against the final pressure, so that Coulomb's law holds exactly (docs/design-choices.md,
+"The coupled instant").
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .cg import BlockSums, box_cg
+
+__all__ = ["JointResult", "solve_joint"]
+
+#: Inner tolerance of a later pass, as a fraction of the last relative pressure change [1].
+PASS_TOLERANCE_FRACTION = 1e-2
+
+
+@dataclass
+class JointResult:
+    p: np.ndarray           # (N1, N2) pressure [Pa]
+    q1: np.ndarray          # (N1, N2) shear [Pa], within the bound of the last pass
+    bound: np.ndarray       # (N1, N2) that bound, μ p of the pass before [Pa]
+    omega3: float           # normal approach [m] (the p row's multiplier)
+    Ax: np.ndarray          # (2, N1, N2) (K33 p + K31 q1, K13 p + K11 q1) [m]
+    iterations: int
+    passes: int
+    converged: bool
+    residual: float         # the failing solve's residual, or the last pressure change
+
+
+def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter, max_passes,
+                first_tol) -> JointResult:
+    """The coupled instant of the scalar form under force control of W and T1.
+
+    Parameters
+    ----------
+    op : ContactOperator
+        Operator of the instant (its creep weights included); not rigid.
+    b : ndarray (2, N1, N2)
+        The known normal gap hi + U3 and the known in-plane displacement less the
+        previous instant's, U1 − u1(k−1) [m].
+    W, T1 : float
+        Normal and tangential force [N]; |T1| within the bounds' capacity.
+    cell_area : float
+        [m²]
+    mu : float or ndarray (N1, N2)
+        Friction coefficient [1].
+    p0, q0 : ndarray (N1, N2)
+        Warm starts [Pa]: the previous instant's pressure (in contact somewhere) and shear.
+    tol, max_iter, max_passes :
+        As in :class:`contactpipe.solver.coupling.Tolerances`.
+    first_tol : float
+        Inner tolerance of the first pass [1] (the loosest).
+
+    Returns
+    -------
+    JointResult
+        ``converged`` False when a solve stopped or the passes did not settle.
+    """
+    conv, k = op.conv, op.k
+    # the shear is solved as s = q1 / μ, of the pressure's size, so that the stacked
+    # convergence measure Σ|Δ(p, s)| / Σ|(p, s)| holds the shear to the tolerance of the
+    # tangential solve (Σ|Δq1| / Σμp) and not only to μ times it; with the preconditioner
+    # scaled alike the iterates are those of the unscaled problem
+    blocks = [[k["33"], mu * k["31"]], [mu * k["13"], mu * mu * k["11"]]]
+    M = op.normal_preconditioner()
+    shape = (2,) + p0.shape
+
+    def apply(x):
+        return conv.convolve_matrix(blocks, [x[0], x[1]], out=np.empty(shape))
+
+    def precondition(v):
+        return np.stack([M(v[0]), M(v[1]) / (mu * mu)])
+
+    b = np.stack([b[0], mu * b[1]])
+    rows = BlockSums([W / cell_area, T1 / cell_area / mu])
+    zero, inf = np.zeros_like(p0), np.full_like(p0, np.inf)
+    p, s = np.array(p0, dtype=float), np.array(q0, dtype=float) / mu
+    lag_old, Ax, its, change = None, None, 0, np.inf
+    inner = max(tol, first_tol)
+    for passes in range(1, max_passes + 1):
+        lag = p                                   # the bound of s: |s| <= p (lagged)
+        if lag_old is not None:                   # slip cells stay on their moved bound
+            slip = (lag_old > 0) & (np.abs(s) >= lag_old)
+            moved = np.where(slip, np.copysign(lag, s), s)
+            if not np.array_equal(moved, s):
+                s, Ax = moved, None                 # A x of the moved start: recomputed
+        res = box_cg(apply, b, np.stack([zero, -lag]), np.stack([inf, lag]), rows,
+                     np.stack([p, s]), tol=inner, max_iter=max_iter, restore="shift",
+                     Ax0=Ax, precondition=precondition)
+        its += res.iterations
+        if not res.converged:
+            return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
+                               res.residual)
+        change = float(np.abs(res.x[0] - p).sum()) * cell_area / max(W, 1e-300)
+        p, s, Ax = res.x[0], res.x[1], res.Ax
+        last = inner == tol
+        inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
+        lag_old = lag
+        if change < tol and last:
+            Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
+            return JointResult(p, mu * s, mu * lag, float(res.multiplier[0]), Ax, its,
+                               passes, True, change)
+    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False, change)
