@@ -43,6 +43,7 @@ from .materials import dundurs_beta
 from .nomenclature import variables_for
 from .planning import check_resources, estimate_resources, plan as make_plan
 from .solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
+from .solver.warm_start import self_similar_start
 from .solver.memory import BodyMemory, make_memory, resolve_body_rule
 from .solver.normal import NormalResult
 from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
@@ -198,6 +199,8 @@ class _Problem:
         self.W, self.T1, self.T2 = self.program.force[:3]
         self.dt = float(self.t[1] - self.t[0]) if self.t.size > 1 else 0.0
         self.mu = scene.friction.on_grid(self.x1, self.x2)      # a float, or a map
+        #: the contact's growth exponent under load, where self-similar (solver.warm_start)
+        self.similar = {"sphere": 1 / 3, "ellipsoid": 1 / 3}.get(scene.geometry.shape)
         self.X1, self.X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
         self.limits = Tolerances(sv.tolerance, sv.max_iterations, sv.max_coupling_passes)
         self.tang = pl.tangential != "none"
@@ -497,10 +500,13 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
     # the normal problem is unchanged from the previous instant: reuse its solution
     same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
                    and _same_normal(pb.program, k) and st.normal is not None)
-    iterations = passes = 0
+    iterations, passes, f_last = 0, 0, 0.0
     for f in pb.fractions(first, _drive(pb.program, k)):
         sub = pb.sub_plan(first)
         previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None, st.motion)
+        if f_last > 0.0 and pb.similar is not None:     # a preload sub-step: its start
+            previous = self_similar_start(previous, f / f_last, pb.similar)
+        f_last = f
         res = solve_instant(op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub,
                             previous, pb.limits_of(f), controls=pb.controls(k, f))
         iterations += res.iterations

@@ -1,0 +1,66 @@
+"""A self-similar warm start for the sub-steps of a growing load (the frictional preload).
+
+Under a growing normal load on a gap homogeneous of degree d in the distance from its apex
+(a sphere or an ellipsoid: d = 2), the contact grows self-similarly: its size goes as
+W^(1/(d+1)) and the tractions, pressure and Spence's shear alike, keep their shape,
+stretched in x by λ and scaled by W/(λ² W_from) (Spence 1975; for a sphere λ = (W/W_from)^(1/3)
+and both fields scale by λ). The sub-steps of a frictional preload (graded fractions
+(k/n)²) grow the contact by tens of per cent each, so the previous sub-step's fields,
+stretched so, start the next one much closer than as they are: measured at 128², steel on
+aluminium, the 8 sub-steps of the run's preload cost 895 FFT pairs instead of 1 241
+(docs/design-choices.md, "The first instant").
+
+It is only a start: the solves still run to the tolerance from it, and the path memory of
+friction (the previous relative displacement) is not touched.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy import ndimage
+
+__all__ = ["self_similar_start"]
+
+
+def _stretch(f, lam, centre):
+    """f (N1, N2) stretched by ``lam`` about ``centre`` (in cell indices), bilinear, zero
+    outside the grid."""
+    i, j = np.meshgrid(np.arange(f.shape[0], dtype=float), np.arange(f.shape[1], dtype=float),
+                       indexing="ij")
+    return ndimage.map_coordinates(f, [centre[0] + (i - centre[0]) / lam,
+                                       centre[1] + (j - centre[1]) / lam],
+                                   order=1, mode="constant", cval=0.0)
+
+
+def self_similar_start(previous, ratio, exponent):
+    """The warm start of a sub-step whose load is ``ratio`` times the last one's.
+
+    Parameters
+    ----------
+    previous : contactpipe.solver.coupling.Previous
+        What the last sub-step left (its pressure ``p_guess`` and shear ``q`` are used).
+    ratio : float
+        W / W_from > 0 [1].
+    exponent : float
+        1/(d + 1) for a gap homogeneous of degree d about its apex (1/3 for a sphere).
+
+    Returns
+    -------
+    Previous
+        ``previous`` with p_guess and q stretched by λ = ratio^exponent about the pressure's
+        centroid and scaled by ratio/λ²; unchanged where nothing is in contact yet.
+    """
+    p = previous.p_guess
+    total = float(p.sum())
+    if total <= 0.0 or ratio <= 0.0 or ratio == 1.0:
+        return previous
+    i = np.arange(p.shape[0], dtype=float)
+    j = np.arange(p.shape[1], dtype=float)
+    centre = (float(p.sum(axis=1) @ i) / total, float(p.sum(axis=0) @ j) / total)
+    lam = ratio ** exponent
+    scale = ratio / lam ** 2
+    p_new = np.maximum(_stretch(p, lam, centre), 0.0) * scale
+    q_new = np.stack([_stretch(c, lam, centre) * scale if np.any(c) else np.zeros_like(c)
+                      for c in previous.q])
+    return replace(previous, p_guess=p_new, q=q_new)

@@ -1,0 +1,189 @@
+"""The coupled instant's faster paths (issue 12): each must give the answer of the path it
+replaces to within the tolerance.
+
+* the joint solve over (p, q1) (:mod:`contactpipe.solver.joint`) against block
+  Gauss-Seidel passes;
+* the preconditioned tangential CG against the plain one, and the exact placement of the
+  slip cells on their moved bound that it needs (:func:`follow_bound`);
+* the self-similar warm start of the preload's sub-steps
+  (:mod:`contactpipe.solver.warm_start`) against the unstretched start;
+* the block force rows of the joint solve (:class:`BlockSums`) against their definitions.
+
+FFT pairs and times are benchmark figures (``contactpipe bench fretting paper-fig3``),
+not asserted here.
+"""
+import numpy as np
+import pytest
+
+import contactpipe as cp
+from contactpipe import simulation
+from contactpipe.solver import coupling, joint, tangential
+from contactpipe.solver.cg import BlockSums, box_cg
+from contactpipe.solver.coupling import Previous, follow_bound
+
+from helpers import A_HERTZ, MU, P0_HERTZ, fretting_scene
+
+ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
+MAXWELL = {"material": "viscoelastic", "young": 105e9, "poisson": 0.3, "creep": "maxwell",
+           "relaxation_time": 1.0}
+TOL = 1e-10
+
+
+def steel_on_aluminium(n=32, steps=20):
+    return fretting_scene(n=n, steps=steps, halfspace=dict(ALUMINIUM),
+                          solver={"tolerance": TOL})
+
+
+def rigid_on_maxwell(n=32, steps=20):
+    """Paper fig. 3 with the coupling of nu = 0.3 (beta = 0.29; the glassy composite
+    modulus is the steel pair's, so 3 a_H is its window too)."""
+    return fretting_scene(n=n, steps=steps, indenter={"material": "rigid"},
+                          halfspace=dict(MAXWELL), solver={"tolerance": TOL})
+
+
+def fields(ds):
+    return ds.p.values, ds.q1.values, ds.omega1.values
+
+
+def assert_same(a, b, p_tol, q_tol):
+    pa, qa, wa = fields(a)
+    pb, qb, wb = fields(b)
+    p0 = pa.max()
+    assert np.abs(pa - pb).max() <= p_tol * p0, np.abs(pa - pb).max() / p0
+    assert np.abs(qa - qb).max() <= q_tol * MU * p0, np.abs(qa - qb).max() / (MU * p0)
+    assert np.abs(wa - wb).max() <= q_tol * np.abs(wa).max()
+
+
+@pytest.mark.parametrize("build", [steel_on_aluminium, rigid_on_maxwell],
+                         ids=["steel-on-aluminium", "rigid-on-maxwell"])
+def test_joint_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
+    """32², 20 steps, tolerance 1e-10, preload and fretting loop: the joint solve runs (on
+    every instant after the first preload sub-step) and its p, q1 and ω1 are the block
+    Gauss-Seidel passes' within 1e-7 of p0 and μp0 (measured 8.5e-11 / 1.5e-10 steel on
+    aluminium, 4.9e-11 / 4.4e-10 rigid on Maxwell)."""
+    calls = []
+    real = joint.solve_joint
+
+    def counted(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(coupling, "solve_joint", counted)
+    fast = cp.simulate(build())
+    assert len(calls) >= fast.sizes["time"] - 1
+    monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
+    slow = cp.simulate(build())
+    assert_same(fast, slow, 1e-7, 1e-7)
+
+
+def test_preconditioned_tangential_gives_the_plain_answer(monkeypatch):
+    """Steel on aluminium, 32², 20 steps, tolerance 1e-10, block Gauss-Seidel: the
+    preconditioned scalar CG against the plain one, within 1e-7 of p0 and μp0 (measured
+    5.5e-12 / 8.0e-10)."""
+    monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
+    fast = cp.simulate(steel_on_aluminium())
+    real = tangential.solve_scalar
+    monkeypatch.setattr(coupling, "solve_scalar",
+                        lambda *a, **k: real(*a, **{**k, "precondition": False}))
+    slow = cp.simulate(steel_on_aluminium())
+    assert_same(fast, slow, 1e-7, 1e-7)
+
+
+def test_self_similar_start_of_the_preload(monkeypatch):
+    """Rigid sphere on Maxwell, 32², 20 steps: the preload's sub-steps started from the
+    stretched fields give the fields of the unstretched start within 1e-7 of p0 and μp0
+    (measured 1.0e-11 / 1.2e-10),
+    and a Hertz pressure stretched from W/4 to W (64² over 4a) is within 3 % of Hertz at W
+    in Σ|Δp| / Σp (measured 2.1 %; the unstretched one, scaled to W, is off by 97 %)."""
+    fast = cp.simulate(rigid_on_maxwell())
+    monkeypatch.setattr(simulation, "self_similar_start", lambda prev, r, e: prev)
+    slow = cp.simulate(rigid_on_maxwell())
+    assert_same(fast, slow, 1e-7, 1e-7)
+
+    from contactpipe.solver.warm_start import self_similar_start
+    n, span = 64, 4 * A_HERTZ
+    x = (np.arange(n) + 0.5) * span / n - span / 2
+    r2 = x[:, None] ** 2 + x[None, :] ** 2
+
+    def hertz(scale):                    # W scaled by `scale`: a, p0 by its cube root
+        a, p0 = A_HERTZ * scale ** (1 / 3), P0_HERTZ * scale ** (1 / 3)
+        return p0 * np.sqrt(np.clip(1 - r2 / a ** 2, 0, None))
+
+    prev = Previous(np.zeros((2, n, n)), np.zeros((3, n, n)), hertz(0.25))
+    started = self_similar_start(prev, 4.0, 1 / 3).p_guess
+    target = hertz(1.0)
+    as_it_was = hertz(0.25) * target.sum() / hertz(0.25).sum()    # the CG's own rescaling
+    assert np.abs(started - target).sum() < 0.03 * target.sum()
+    assert np.abs(as_it_was - target).sum() > 0.9 * target.sum()
+
+
+def test_follow_bound_puts_slip_cells_on_the_new_bound():
+    """Scalar form: a slip cell lands on ±new exactly (a ratio new/old would round about
+    half of them inside, where the CG takes them for stick cells); stick cells stay."""
+    rng = np.random.default_rng(1)
+    old = rng.uniform(1.0, 2.0, (16, 16))
+    new = old * rng.uniform(0.9, 1.1, (16, 16))
+    q = np.zeros((2, 16, 16))
+    q[0] = np.where(rng.random((16, 16)) < 0.5, old * np.sign(rng.normal(size=(16, 16))),
+                    0.3 * old)
+    out = follow_bound(q, old, new)
+    slip = np.abs(q[0]) == old
+    assert np.array_equal(np.abs(out[0][slip]), new[slip])
+    assert np.array_equal(np.sign(out[0]), np.sign(q[0]))
+    assert np.array_equal(out[0][~slip], q[0][~slip])
+
+
+def test_block_sums_rows():
+    """Each block its own row: the multipliers are the means over each block's own cells,
+    a kept direction sums to zero per block, a restored iterate meets both rows within
+    its bounds; and box_cg with them solves a small two-block problem to the exact
+    solution (a dense active-set reference: the same answer within 1e-8)."""
+    rng = np.random.default_rng(2)
+    rows = BlockSums([3.0, -1.0])
+    g = rng.normal(size=(2, 6, 6))
+    cells = rng.random((2, 6, 6)) < 0.5
+    lam = rows.fit(g, cells)
+    assert lam == pytest.approx([g[0][cells[0]].mean(), g[1][cells[1]].mean()])
+    z = rows.keep(g, cells)
+    assert abs(z[0][cells[0]].sum()) < 1e-12 and abs(z[1][cells[1]].sum()) < 1e-12
+    assert np.array_equal(z[~cells], g[~cells])
+    lo = np.stack([np.zeros((6, 6)), -np.full((6, 6), 0.2)])
+    hi = np.stack([np.full((6, 6), np.inf), np.full((6, 6), 0.2)])
+    x = rows.restore(np.clip(g, lo, hi), lo, hi, (g > lo) & (g < hi))
+    assert rows.residual(x) == pytest.approx([0, 0], abs=1e-12)
+    assert np.all(x >= lo) and np.all(x <= hi)
+
+    # a symmetric positive definite two-block operator, x = (p, q) on 6 x 6 cells: the
+    # solution meets the optimality conditions of each block with its own multiplier
+    # (zero reduced gradient on free cells, signs at the bounds) to rounding, and agrees
+    # with scipy's SLSQP (itself accurate to about 1e-8 here) within 1e-6
+    m = 72
+    B = rng.normal(size=(m, m))
+    A = B @ B.T / m + np.eye(m)
+    b = rng.normal(size=m)
+    apply = lambda v: (A @ v.ravel()).reshape(2, 6, 6)              # noqa: E731
+    res = box_cg(apply, b.reshape(2, 6, 6), lo, hi, rows, np.zeros((2, 6, 6)), tol=1e-14,
+                 max_iter=5000, restore="shift")
+    assert res.converged
+    assert rows.residual(res.x) == pytest.approx([0, 0], abs=1e-12)
+    g = apply(res.x) + b.reshape(2, 6, 6)
+    free = (res.x > lo) & (res.x < hi)
+    gr = g - rows.field(rows.fit(g, free))
+    assert np.abs(gr[free]).max() < 1e-10
+    assert gr[res.x <= lo].min(initial=0.0) > -1e-10
+    assert gr[res.x >= hi].max(initial=0.0) < 1e-10
+    ref = _dense_box_qp(A, b, lo.ravel(), hi.ravel(), [3.0, -1.0])
+    assert np.abs(res.x.ravel() - ref).max() < 1e-6
+
+
+def _dense_box_qp(A, b, lo, hi, targets):
+    """min ½xᵀAx + bᵀx, lo ≤ x ≤ hi, Σ over each half = its target: scipy's SLSQP."""
+    from scipy.optimize import minimize
+    m = b.size
+    cons = [{"type": "eq", "fun": (lambda x, k=k: x[k * m // 2:(k + 1) * m // 2].sum()
+                                   - targets[k])} for k in range(2)]
+    x0 = np.concatenate([np.full(m // 2, targets[0] / (m // 2)), np.zeros(m // 2)])
+    r = minimize(lambda x: 0.5 * x @ A @ x + b @ x, x0, jac=lambda x: A @ x + b,
+                 bounds=list(zip(lo, np.where(np.isinf(hi), None, hi))), constraints=cons,
+                 method="SLSQP", options={"ftol": 1e-15, "maxiter": 2000})
+    return r.x
