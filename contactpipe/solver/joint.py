@@ -20,7 +20,9 @@ Only the bound g = μp is then lagged. A pass moves the slip cells' shear by μ 
 pressure answers through K31 only, so a pass cuts the pressure change by about μβ
 (measured about 1/100 with exact inner solves, steel on aluminium); block Gauss-Seidel
 cuts it by β²-like factors of 1/20-1/50. Inner tolerances follow the same inexact
-schedule as the block Gauss-Seidel passes. The caller finishes with one tangential solve
+schedule as the block Gauss-Seidel passes; the passes stop when one at the full tolerance
+moves p by less than the tolerance, or by so little that the next would at the contraction
+just measured. The caller finishes with one tangential solve
 against the final pressure, so that Coulomb's law holds exactly (docs/design-choices.md,
 "The coupled instant").
 """
@@ -115,12 +117,17 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter, max_passes,
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
                                res.residual)
+        change_old = change
         change = float(np.abs(res.x[0] - p).sum()) * cell_area / max(W, 1e-300)
         p, s, Ax = res.x[0], res.x[1], res.Ax
         last = inner == tol
         inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
         lag_old = lag
-        if change < tol and last:
+        # settled: a pass at the full tolerance moved p by less than it, or by so little
+        # that the next one, at the contraction just measured, would (the lag of the
+        # bound is then below the tolerance)
+        if last and (change < tol or (0.0 < change_old < np.inf
+                                      and change * min(1.0, change / change_old) < tol)):
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
             return JointResult(p, mu * s, mu * lag, float(res.multiplier[0]), Ax, its,
                                passes, True, change)
