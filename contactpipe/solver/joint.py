@@ -88,14 +88,19 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter, max_passes,
     # tangential solve (Σ|Δq1| / Σμp) and not only to μ times it; with the preconditioner
     # scaled alike the iterates are those of the unscaled problem
     blocks = [[k["33"], mu * k["31"]], [mu * k["13"], mu * mu * k["11"]]]
-    M = op.normal_preconditioner()
     shape = (2,) + p0.shape
 
     def apply(x):
         return conv.convolve_matrix(blocks, [x[0], x[1]], out=np.empty(shape))
 
+    sigma = op.normal_preconditioner_symbol()
+
     def precondition(v):
-        return np.stack([M(v[0]), M(v[1]) / (mu * mu)])
+        z = np.empty(shape)
+        conv.convolve(sigma, v[0], out=z[0])
+        conv.convolve(sigma, v[1], out=z[1])
+        z[1] /= mu * mu
+        return z
 
     b = np.stack([b[0], mu * b[1]])
     rows = BlockSums([W / cell_area, T1 / cell_area / mu])

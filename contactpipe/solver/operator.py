@@ -207,6 +207,12 @@ class ContactOperator:
         negative modes, and even clipped to positive it made a worse preconditioner
         (docs/design-choices.md). Cells of unknown sides are taken square.
         """
+        sigma = self.normal_preconditioner_symbol()
+        return lambda v: self.conv.convolve(sigma, v)
+
+    def normal_preconditioner_symbol(self):
+        """The spectrum (the padded grid's real-FFT layout) that
+        :meth:`normal_preconditioner` multiplies by (cached)."""
         if "precondition33" not in self._derived:
             conv = self.conv
             d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
@@ -216,8 +222,7 @@ class ContactOperator:
                             + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
             sigma[0, 0] = sigma[sigma > 0].min()
             self._derived["precondition33"] = sigma / sigma.max()
-        sigma = self._derived["precondition33"]
-        return lambda v: self.conv.convolve(sigma, v)
+        return self._derived["precondition33"]
 
     def coarse_normal(self):
         """The normal operator on the grid coarsened by two in each direction (cached), or
