@@ -38,6 +38,9 @@ __all__ = ["JointResult", "solve_joint"]
 
 #: Inner tolerance of a later pass, as a fraction of the last relative pressure change [1].
 PASS_TOLERANCE_FRACTION = 1e-2
+#: A pass whose inner tolerance would be within this factor of the full one runs at the
+#: full tolerance, so that it can be the last [1].
+FULL_WITHIN = 10.0
 
 
 @dataclass
@@ -127,6 +130,8 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter, max_passes,
         p, s, Ax = res.x[0], res.x[1], res.Ax
         last = inner == tol
         inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
+        if inner < FULL_WITHIN * tol:       # near the end: this pass may be the last
+            inner = tol
         lag_old = lag
         # settled: a pass at the full tolerance moved p by less than it, or by so little
         # that the next one, at the contraction just measured, would (the lag of the
