@@ -309,8 +309,7 @@ class _Instant:
         prev, U, op = self.prev, self.U, self.op
         b = np.stack([self.gap + U[2], U[0] - prev.u[0]])
         j = solve_joint(op, b, self.W, self.T[0], self.cell, self.mu, prev.p_guess,
-                        prev.q[0], tol, self.lim.max_iter, self.lim.max_passes,
-                        FIRST_PASS_TOLERANCE)
+                        prev.q[0], tol, self.lim.max_iter, self.lim.max_passes)
         self.its += j.iterations
         if not j.converged:
             return None
