@@ -63,7 +63,7 @@ def test_block_convolution_on_fftw_buffers_agrees_with_scipy():
     n1, n2 = 12, 10
     k = body_kernels(n1, n2, 1e-5, 2e-5, 210e9, 0.3)
     a, b = Convolver(n1, n2, backend="pyfftw"), Convolver(n1, n2, backend="scipy")
-    spec = lambda c, comp: None if comp is None else c.kernel_spectrum(k[comp])  # noqa: E731
+    spec = lambda c, comp: None if comp is None else c.kernel_spectrum(k[comp])
     layout = [["11", "12", "13"], ["21", None, "23"], [None, None, "33"], [None, "32", None]]
     xs = [rng.normal(size=(n1, n2)), rng.normal(size=(n1, n2)), None]
     ua = a.convolve_matrix([[spec(a, c) for c in row] for row in layout], xs)

@@ -161,7 +161,7 @@ def test_block_sums_rows():
     B = rng.normal(size=(m, m))
     A = B @ B.T / m + np.eye(m)
     b = rng.normal(size=m)
-    apply = lambda v: (A @ v.ravel()).reshape(2, 6, 6)              # noqa: E731
+    apply = lambda v: (A @ v.ravel()).reshape(2, 6, 6)
     res = box_cg(apply, b.reshape(2, 6, 6), lo, hi, rows, np.zeros((2, 6, 6)), tol=1e-14,
                  max_iter=5000, restore="shift")
     assert res.converged
