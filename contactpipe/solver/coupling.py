@@ -14,12 +14,12 @@ products (A p, A q) from pass to pass. This cuts the FFT pairs of a coupled
 step without changing its converged answer.
 
 The joint solve: a coupled instant of the scalar form under force control of W and T1
-(uniform μ, a previous pressure to start from) is solved instead as one bound-constrained
-problem over (p, q1) with only the bound μp lagged between passes
-(:mod:`contactpipe.solver.joint`), then finished by a tangential solve against the final
-pressure like the passes above: the same answer within the tolerance, in fewer FFT pairs
-(paper fig. 3 with coupling, 128²: 159 → 121 pairs per step). Where it does not converge
-the block Gauss-Seidel passes take over. ``passes`` then counts the joint passes.
+(uniform μ) is solved instead as one bound-constrained problem over (p, q1) with only the
+bound μp lagged between passes (:mod:`contactpipe.solver.joint`; from nothing in contact,
+a normal solve starts it), then finished by a tangential solve against the final pressure
+like the passes above: the same answer within the tolerance, in fewer FFT pairs (paper
+fig. 3 with coupling, 128²: 159 → 103 pairs per step). Where it does not converge the
+block Gauss-Seidel passes take over. ``passes`` then counts the joint passes.
 
 The caller gives the solver limits as one :class:`Tolerances` and what it knows of the
 previous instant as one :class:`Previous`; :func:`solve_instant` returns an
@@ -56,6 +56,8 @@ FREEDOMS = (("W", "omega3"), ("T1", "omega1"), ("T2", "omega2"), ("M1", "phi1"),
 FIRST_PASS_TOLERANCE = 1e-4
 #: Inner tolerance of a later pass, as a fraction of the last relative pressure change [1].
 PASS_TOLERANCE_FRACTION = 1e-3
+#: Tolerance of the normal solve that starts a joint solve from nothing in contact [1].
+COLD_START_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -295,11 +297,10 @@ class _Instant:
 
     def joint_applies(self, ctl, previous) -> bool:
         """The instant can be solved as one problem over (p, q1) (:mod:`.joint`): a coupled
-        scalar form under force control of W and T1 alone, with a uniform μ and a previous
-        pressure in contact to start from."""
+        scalar form under force control of W > 0 and T1 alone, with a uniform μ."""
         return (self.coupled and self.tang == "scalar" and not self.op.rigid
                 and ctl.is_force(0) and self.normal_ctl is None and self.rows is None
-                and np.ndim(self.mu) == 0 and bool(np.any(previous.p_guess > 0))
+                and np.ndim(self.mu) == 0 and self.W > 0.0
                 and abs(self.T[0]) <= self.mu * self.W)
 
     def joint(self, tol):
@@ -307,8 +308,17 @@ class _Instant:
         the final pressure; None when the joint solve did not converge (the block
         Gauss-Seidel passes then take over from the start)."""
         prev, U, op = self.prev, self.U, self.op
+        p0 = prev.p_guess
+        if not np.any(p0 > 0):
+            # nothing in contact yet (a preload's first sub-step): the pressure of the
+            # normal problem alone, by its multilevel start, begins the joint solve
+            n = self.normal(prev.q, p0, max(tol, COLD_START_TOLERANCE))
+            self.its += n.iterations
+            if not n.converged:
+                return None
+            p0 = n.p
         b = np.stack([self.gap + U[2], U[0] - prev.u[0]])
-        j = solve_joint(op, b, self.W, self.T[0], self.cell, self.mu, prev.p_guess,
+        j = solve_joint(op, b, self.W, self.T[0], self.cell, self.mu, p0,
                         prev.q[0], tol, self.lim.max_iter, self.lim.max_passes)
         self.its += j.iterations
         if not j.converged:
