@@ -58,7 +58,7 @@ def assert_same(a, b, p_tol, q_tol):
                          ids=["steel-on-aluminium", "rigid-on-maxwell"])
 def test_joint_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
     """32², 20 steps, tolerance 1e-10, preload and fretting loop: the joint solve runs (on
-    every instant after the first preload sub-step) and its p, q1 and ω1 are the block
+    every instant and preload sub-step) and its p, q1 and ω1 are the block
     Gauss-Seidel passes' within 1e-7 of p0 and μp0 (measured 7.9e-11 / 2.5e-10 steel on
     aluminium, 4.9e-11 / 4.4e-10 rigid on Maxwell)."""
     calls = []
@@ -70,7 +70,7 @@ def test_joint_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
 
     monkeypatch.setattr(coupling, "solve_joint", counted)
     fast = cp.simulate(build())
-    assert len(calls) >= fast.sizes["time"] - 1
+    assert len(calls) >= fast.sizes["time"] + fast.attrs["preload_substeps"] - 1
     monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
     slow = cp.simulate(build())
     assert_same(fast, slow, 1e-7, 1e-7)
