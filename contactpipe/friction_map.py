@@ -17,7 +17,7 @@ import os
 import numpy as np
 
 from .exceptions import SceneError
-from .gridded import coordinate_problems, coverage_problems
+from .gridded import coordinate_problems, coverage_problems, variable_problems
 
 __all__ = ["check_mu_file", "mu_on_grid", "largest", "WHERE"]
 
@@ -57,18 +57,10 @@ def check_mu_file(file, x1=None, x2=None) -> list:
     except Exception as exc:  # noqa: BLE001 - any failure to read is the user's file
         return [f"{where}: not a readable netCDF file ({type(exc).__name__}: {exc})"]
     with ds:
-        if "mu" not in ds.data_vars:
-            found = ", ".join(map(str, ds.data_vars)) or "none"
-            return [f"{where}: no variable 'mu' (found: {found}); the friction coefficient "
-                    f"must be a variable 'mu' over dimensions x1, x2"]
-        mu = ds["mu"]
-        if mu.dtype.kind not in "iuf":
-            return [f"{where}: variable 'mu' holds {mu.dtype} values; it must be real "
-                    f"numbers [1]"]
-        if set(mu.dims) != {"x1", "x2"}:
-            return [f"{where}: variable 'mu' has dimensions {tuple(mu.dims)}, expected "
-                    f"('x1', 'x2')"]
-        values = np.asarray(mu.values, dtype=float)
+        problems = variable_problems(ds, "mu", where, "the friction coefficient", "1")
+        if problems:
+            return problems
+        values = np.asarray(ds["mu"].values, dtype=float)
         bad = int(np.count_nonzero(~np.isfinite(values)))
         if bad:
             return [f"{where}: 'mu' holds NaN or inf at {bad} of {values.size} points; "

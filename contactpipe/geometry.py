@@ -21,7 +21,7 @@ import os
 import numpy as np
 
 from .exceptions import SceneError
-from .gridded import coordinate_problems, coverage_problems
+from .gridded import coordinate_problems, coverage_problems, variable_problems
 
 __all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface"]
 
@@ -187,18 +187,10 @@ def check_surface(file, x1=None, x2=None) -> list:
         return [f"{where}: not a readable netCDF file ({type(exc).__name__}: {exc}); "
                 f"give a netCDF file with a variable 'gap' over x1, x2, or a .npy array"]
     with ds:
-        if "gap" not in ds.data_vars:
-            found = ", ".join(map(str, ds.data_vars)) or "none"
-            return [f"{where}: no variable 'gap' (found: {found}); the gap [m] must be a "
-                    f"variable 'gap' over dimensions x1, x2"]
-        gap = ds["gap"]
-        if not _is_real(gap.dtype):
-            return [f"{where}: variable 'gap' holds {gap.dtype} values; the gap must be real "
-                    f"numbers [m]"]
-        if set(gap.dims) != {"x1", "x2"}:
-            return [f"{where}: variable 'gap' has dimensions {tuple(gap.dims)}, "
-                    f"expected ('x1', 'x2')"]
-        units = str(gap.attrs.get("units", "m")).strip()
+        problems = variable_problems(ds, "gap", where, "the gap", "m")
+        if problems:
+            return problems
+        units = str(ds["gap"].attrs.get("units", "m")).strip()
         if units not in _METRE:
             return [f"{where}: variable 'gap' has units {units!r}, expected 'm'"]
         problems, ranges = coordinate_problems(ds, where)

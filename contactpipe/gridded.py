@@ -2,14 +2,32 @@
 
 A surface gap (``geometry.file``) and a friction map (``friction.mu``) are both a variable
 over dimensions ``x1``, ``x2`` with coordinates in metres, any order, that must cover the
-scene's grid. :func:`coordinate_problems` checks the coordinates and
-:func:`coverage_problems` the grid, with one wording for both callers.
+scene's grid. :func:`variable_problems` checks the variable, :func:`coordinate_problems`
+the coordinates and :func:`coverage_problems` the grid, with one wording for both callers.
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["coordinate_problems", "coverage_problems"]
+__all__ = ["coordinate_problems", "coverage_problems", "variable_problems"]
+
+
+def variable_problems(ds, name: str, where: str, meaning: str, unit: str) -> list:
+    """Problems of a dataset's variable ``name``: it must exist, hold real numbers and lie
+    over dimensions ``x1``, ``x2``. ``meaning`` says what it is in the messages ("the
+    gap"), ``unit`` its unit ("m"); ``where`` starts every message."""
+    if name not in ds.data_vars:
+        found = ", ".join(map(str, ds.data_vars)) or "none"
+        return [f"{where}: no variable {name!r} (found: {found}); {meaning} [{unit}] must be "
+                f"a variable {name!r} over dimensions x1, x2"]
+    var = ds[name]
+    if var.dtype.kind not in "iuf":
+        return [f"{where}: variable {name!r} holds {var.dtype} values; {meaning} must be "
+                f"real numbers [{unit}]"]
+    if set(var.dims) != {"x1", "x2"}:
+        return [f"{where}: variable {name!r} has dimensions {tuple(var.dims)}, expected "
+                f"('x1', 'x2')"]
+    return []
 
 
 def coordinate_problems(ds, where: str):
