@@ -332,12 +332,8 @@ class _Instant:
             return self.failure("tangential", t_res, j.p, t_res.q, t_res.domega)
         q = t_res.q
         domega, dphi3 = self.motions(t_res)
-        u = U.copy()
-        # u3 from the joint product, mended for the final solve's small change of q1
-        u[2] += j.Ax[0] + op.coupling_to_normal(q[0] - j.q1)
-        u[:2] += up
-        u[0] += t_res.Aq[0]
-        u[1] += op.conv.convolve(op.k["21"], q[0])
+        # u3 from the joint product K33 p + K31 q1, mended for the final solve's change of q1
+        u = self.displacement(j.Ax[0], q, t_res, up, q_in_u3=j.q1)
         n = NormalResult(j.p, j.omega3, u[2] - U[2], j.iterations, j.residual, True)
         return InstantResult(j.p, q, u, j.omega3, domega, self.its, self.passes, True,
                              max(j.residual, t_res.residual), normal=n, dphi3=dphi3)
@@ -352,15 +348,18 @@ class _Instant:
         return InstantResult(p, q, self.U, getattr(res, "omega3", 0.0), domega, self.its,
                              self.passes, False, res.residual, what)
 
-    def displacement(self, n, q, t_res, up):
-        """The relative displacement from what the solves computed (few extra FFTs)."""
+    def displacement(self, u3, q, t_res, up, q_in_u3=None):
+        """The relative displacement from what the solves computed (few extra FFTs):
+        ``u3`` the normal displacement the solve of p computed (K33 p, or with the joint
+        solve K33 p + K31 ``q_in_u3``, its shear q1)."""
         op, u = self.op, self.U.copy()
         if op.rigid:
             return u
-        u[2] += n.Ap
+        u[2] += u3
         if self.tang != "none":
             if self.coupled:
-                u[2] += op.coupling_to_normal(q[0], q[1] if self.vector else None)
+                q1 = q[0] if q_in_u3 is None else q[0] - q_in_u3
+                u[2] += op.coupling_to_normal(q1, q[1] if self.vector else None)
                 u[:2] += up
             if self.vector:
                 u[:2] += t_res.Aq                                # [K11 K12; K21 K22] q
@@ -477,6 +476,6 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                 break
         worst = max(worst, t_res.residual)
 
-    u = s.displacement(n, q, t_res, up)
+    u = s.displacement(n.Ap, q, t_res, up)
     return InstantResult(p, q, u, n.omega3, domega, s.its, s.passes, True, worst, normal=n,
                          phi=np.asarray(n.phi, float).copy(), dphi3=dphi3)
