@@ -43,7 +43,7 @@ import numpy as np
 from .cg import Constraints
 from .joint import solve_joint
 from .normal import NormalControl, NormalResult, solve_normal
-from .tangential import force_rows, solve_scalar, solve_vector
+from .tangential import follow_bound, force_rows, solve_scalar, solve_vector
 
 __all__ = ["Controls", "FREEDOMS", "InstantResult", "Previous", "Tolerances",
            "follow_bound", "solve_instant"]
@@ -176,25 +176,6 @@ class InstantResult:
     normal: NormalResult | None = None   # the last normal solve (reusable by the caller)
     phi: np.ndarray = field(default_factory=lambda: np.zeros(2))   # (φ1, φ2) reached [rad]
     dphi3: float = 0.0       # rotation increment Δφ3 [rad]
-
-
-#: A warm start's cell counts as on its bound within this relative distance [1].
-ON_BOUND = 1e-9
-
-
-def follow_bound(q, old, new):
-    """The warm start of a tangential solve whose bound moved from ``old`` to ``new``
-    [Pa]: the cells on their old bound (within :data:`ON_BOUND`) stay on it, scaled with
-    it; the others as they were. A slip cell lands on the new bound as exactly as rounding
-    allows, and in the scalar form (q2 = 0) on ±new itself: a ratio new/old rounds about
-    half of them just inside, where the CG would take them for stick cells."""
-    mag = np.hypot(q[0], q[1])
-    slip = (old > 0) & (mag >= old * (1.0 - ON_BOUND))
-    ratio = np.where(slip, new / np.where(mag > 0, mag, 1.0), 1.0)
-    out = q * ratio
-    if not q[1].any():                   # the scalar form: exactly on ±new
-        out[0] = np.where(slip, np.copysign(new, q[0]), q[0])
-    return out
 
 
 class _Instant:

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cg import BlockSums, box_cg
+from .tangential import follow_bound
 
 __all__ = ["JointResult", "solve_joint"]
 
@@ -117,8 +118,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     for passes in range(1, max_passes + 1):
         lag = p                                   # the bound of s: |s| <= p (lagged)
         if lag_old is not None:                   # slip cells stay on their moved bound
-            slip = (lag_old > 0) & (np.abs(s) >= lag_old)
-            moved = np.where(slip, np.copysign(lag, s), s)
+            moved = follow_bound(s, lag_old, lag)
             if not np.array_equal(moved, s):
                 s, Ax = moved, None                 # A x of the moved start: recomputed
         res = box_cg(apply, b, np.stack([zero, -lag]), np.stack([inf, lag]), rows,

@@ -42,7 +42,7 @@ import numpy as np
 
 from .cg import Constraints, box_cg, disk_project, fista, project_box_sum, project_rows
 
-__all__ = ["TangentialResult", "solve_scalar", "solve_vector", "disk_project",
+__all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "disk_project",
            "project_disks_sum", "force_rows", "slip_multipliers"]
 
 
@@ -64,6 +64,28 @@ def force_rows(shape, T, cell_area) -> Constraints:
     rows[0, 0] = 1.0
     rows[1, 1] = 1.0
     return Constraints(rows, np.asarray(T, dtype=float) / cell_area, sums=True)
+
+
+#: A warm start's cell counts as on its bound within this relative distance [1].
+ON_BOUND = 1e-9
+
+
+def follow_bound(q, old, new):
+    """The warm start of a tangential solve whose bound moved from ``old`` to ``new``
+    [Pa]: the cells on their old bound (within :data:`ON_BOUND`) stay on it, scaled with
+    it; the others as they were. ``q`` is (2, N1, N2), or (N1, N2) for one component.
+
+    A slip cell lands on the new bound as exactly as rounding allows, and with one
+    component (q2 = 0) on ±new itself: a ratio new/old rounds about half of them just
+    inside, where the CG would take them for stick cells."""
+    if q.ndim == 2:
+        slip = (old > 0) & (np.abs(q) >= old * (1.0 - ON_BOUND))
+        return np.where(slip, np.copysign(new, q), q)
+    if not q[1].any():
+        return np.stack([follow_bound(q[0], old, new), q[1]])
+    mag = np.hypot(q[0], q[1])
+    slip = (old > 0) & (mag >= old * (1.0 - ON_BOUND))
+    return q * np.where(slip, new / np.where(mag > 0, mag, 1.0), 1.0)
 
 
 def _infeasible(x, con, target, scale, tol) -> bool:
@@ -91,7 +113,7 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
         returned ``domega`` is then 0, the caller knows the shift).
     q0 : ndarray
         Warm start for q1 [Pa]. A slip cell should sit exactly on its bound
-        (:func:`contactpipe.solver.coupling.follow_bound`): one rounded inside counts as
+        (:func:`follow_bound`): one rounded inside counts as
         stick, and the preconditioned direction, which is not local, then carries the
         whole field off before the projection puts it back.
     precondition : bool
