@@ -101,7 +101,10 @@ def test_ellipsoid():
 
 def test_solver_cost_in_fft_pairs():
     """256² Hertz to 1e-10: the iteration count and FFT pairs are recorded per step
-    (the benchmark prints them; here only the bookkeeping is checked)."""
+    (the benchmark prints them; here only the bookkeeping is checked). An iteration
+    applies the operator once (one FFT pair of its grid) and the preconditioner once (a
+    quarter pair, unpadded); those of the coarse-grid start count a quarter as much, so
+    each iteration costs at least 1.25 / 4 pair."""
     ds = hertz_run(64)
     assert int(ds.iterations[-1]) > 0
-    assert int(ds.fft_pairs[-1]) >= int(ds.iterations[-1])
+    assert int(ds.fft_pairs[-1]) >= 1.25 / 4 * int(ds.iterations[-1])

@@ -14,7 +14,8 @@ under pressure; no slip increment in stick, a slip increment against the shear o
 bound), with multipliers (ω3, Δω1). :func:`contactpipe.solver.cg.box_cg` solves it with
 the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and the (−Δ)^½ filter on
 each block as preconditioner: one operator application is two FFT pairs (two forward
-transforms, four kernel products, two inverse), the preconditioner two more.
+transforms, four kernel products, two inverse), the preconditioner half of one (two
+fields filtered on the unpadded grid).
 
 Only the bound g = μp is then lagged. A pass moves the slip cells' shear by μ δp and the
 pressure answers through K31 only, so a pass cuts the pressure change by about μβ
@@ -100,12 +101,10 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     def apply(x):
         return conv.convolve_matrix(blocks, [x[0], x[1]], out=np.empty(shape))
 
-    sigma = op.normal_preconditioner_symbol()
+    filter_ = op.normal_preconditioner()
 
     def precondition(v):
-        z = np.empty(shape)
-        conv.convolve(sigma, v[0], out=z[0])
-        conv.convolve(sigma, v[1], out=z[1])
+        z = filter_(v, out=np.empty(shape))
         z[1] /= mu * mu
         return z
 

@@ -197,31 +197,34 @@ class ContactOperator:
 
     def normal_preconditioner(self):
         """``M(v)``: v filtered by the symbol of (−Δ)^½, the discrete square root of the
-        negative Laplacian on the padded grid (one FFT pair), an approximation of the
-        normal operator's inverse (K33 behaves as 1/|ξ|) for preconditioned CG (cached).
+        negative Laplacian, on the n1 x n2 grid itself taken as periodic (a quarter of an
+        FFT pair per field, :meth:`Convolver.periodic_filter`): an approximation of the
+        normal operator's inverse (K33 behaves as 1/|ξ|) for preconditioned CG. ``v`` may
+        be one field or a stack of them.
 
-        The symbol is sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the padded grid's
-        angular frequencies, with the zero mode set to the smallest other value (M is then
+        The symbol is sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the grid's angular
+        frequencies, with the zero mode set to the smallest other value (M is then
         symmetric positive definite; its scale does not matter to CG). Not the inverse of
         the padded K33 circulant itself: with rectangular cells that circulant has
-        negative modes, and even clipped to positive it made a worse preconditioner
+        negative modes, and even clipped to positive it made a worse preconditioner; and
+        not on the padded grid, which cost four times the work for the same iterations
         (docs/design-choices.md). Cells of unknown sides are taken square.
         """
         sigma = self.normal_preconditioner_symbol()
-        return lambda v: self.conv.convolve(sigma, v)
+        return lambda v, out=None: self.conv.periodic_filter(sigma, v, out=out)
 
     def normal_preconditioner_symbol(self):
-        """The spectrum (the padded grid's real-FFT layout) that
+        """The spectrum (real-FFT layout of the n1 x n2 grid, scaled by 1/(n1 n2)) that
         :meth:`normal_preconditioner` multiplies by (cached)."""
         if "precondition33" not in self._derived:
             conv = self.conv
             d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
-            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.m1)[:, None]
-            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.m2)[None, :]
+            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.n1)[:, None]
+            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.n2)[None, :]
             sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
                             + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
             sigma[0, 0] = sigma[sigma > 0].min()
-            self._derived["precondition33"] = sigma / sigma.max()
+            self._derived["precondition33"] = sigma / (sigma.max() * conv.n1 * conv.n2)
         return self._derived["precondition33"]
 
     def coarse_normal(self):
