@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .cg import Constraints
-from .joint import solve_joint
+from .joint import finish, solve_joint
 from .normal import NormalControl, NormalResult, solve_normal
 from .tangential import follow_bound, force_rows, solve_scalar, solve_vector
 
@@ -285,9 +285,9 @@ class _Instant:
                 and abs(self.T[0]) <= self.mu * self.W)
 
     def joint(self, tol):
-        """The instant by :func:`.joint.solve_joint`, finished by a tangential solve against
-        the final pressure; None when the joint solve did not converge (the block
-        Gauss-Seidel passes then take over from the start)."""
+        """The instant by :func:`.joint.solve_joint`, its shear put on the final pressure's
+        bound by :func:`.joint.finish`; None when the joint solve did not converge (the
+        block Gauss-Seidel passes then take over from the start)."""
         prev, U, op = self.prev, self.U, self.op
         p0 = prev.p_guess
         if not np.any(p0 > 0):
@@ -304,20 +304,13 @@ class _Instant:
         self.its += j.iterations
         if not j.converged:
             return None
-        self.passes, self.bound = j.passes, j.bound
+        self.passes = j.passes
         q = np.zeros_like(prev.q)
-        q[0] = j.q1
-        t_res, up = self.tangential(j.p, q, tol)
-        self.its += t_res.iterations
-        if not t_res.converged:
-            return self.failure("tangential", t_res, j.p, t_res.q, t_res.domega)
-        q = t_res.q
-        domega, dphi3 = self.motions(t_res)
-        # u3 from the joint product K33 p + K31 q1, mended for the final solve's change of q1
-        u = self.displacement(j.Ax[0], q, t_res, up, q_in_u3=j.q1)
-        n = NormalResult(j.p, j.omega3, u[2] - U[2], j.iterations, j.residual, True)
-        return InstantResult(j.p, q, u, j.omega3, domega, self.its, self.passes, True,
-                             max(j.residual, t_res.residual), normal=n, dphi3=dphi3)
+        q[0], u_t, domega1 = finish(op, j, self.mu, b[1])
+        self.bound = self.mu * j.p
+        n = NormalResult(j.p, j.omega3, u_t[2], j.iterations, j.residual, True)
+        return InstantResult(j.p, q, U + u_t, j.omega3, np.array([domega1, 0.0]), self.its,
+                             self.passes, True, j.residual, normal=n, dphi3=0.0)
 
     def capacity(self, p, W):
         """The largest |T| the bounds can carry: mu W, or Σ mu p Δ with a mapped mu [N]."""
@@ -329,18 +322,16 @@ class _Instant:
         return InstantResult(p, q, self.U, getattr(res, "omega3", 0.0), domega, self.its,
                              self.passes, False, res.residual, what)
 
-    def displacement(self, u3, q, t_res, up, q_in_u3=None):
+    def displacement(self, u3, q, t_res, up):
         """The relative displacement from what the solves computed (few extra FFTs):
-        ``u3`` the normal displacement the solve of p computed (K33 p, or with the joint
-        solve K33 p + K31 ``q_in_u3``, its shear q1)."""
+        ``u3`` the normal displacement the solve of p computed (K33 p)."""
         op, u = self.op, self.U.copy()
         if op.rigid:
             return u
         u[2] += u3
         if self.tang != "none":
             if self.coupled:
-                q1 = q[0] if q_in_u3 is None else q[0] - q_in_u3
-                u[2] += op.coupling_to_normal(q1, q[1] if self.vector else None)
+                u[2] += op.coupling_to_normal(q[0], q[1] if self.vector else None)
                 u[:2] += up
             if self.vector:
                 u[:2] += t_res.Aq                                # [K11 K12; K21 K22] q

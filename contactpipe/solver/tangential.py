@@ -88,6 +88,16 @@ def follow_bound(q, old, new):
     return q * np.where(slip, new / np.where(mag > 0, mag, 1.0), 1.0)
 
 
+def scalar_multiplier(g, q1, bound) -> float:
+    """Δω1 [m], the force row's multiplier of a one-component solution ``q1`` [Pa] under
+    the bound μp [Pa], g = K11 q1 + b1 [m]: fitted to the stick cells, or where no cell
+    sticks clearly, to the slip directions (:func:`slip_multipliers`)."""
+    stick = (bound > 0) & (np.abs(q1) < bound * (1.0 - 1e-12))
+    if _pinned(stick, np.abs(q1), bound):
+        return float(_multiplier(g[None], stick)[0])
+    return float(slip_multipliers(g, q1, bound, None)[0])
+
+
 def _infeasible(x, con, target, scale, tol) -> bool:
     """The rows are not met (a force beyond what the bounds can carry)."""
     if con is None:
@@ -149,13 +159,7 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
         return x, Ax, its, err, ok and not _infeasible(x, con, target, scale, tol_)
 
     x, Ax, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
-    stick = (bound > 0) & (np.abs(x) < bound * (1.0 - 1e-12))
-    if con is not None:
-        lam = 0.0
-    elif _pinned(stick, np.abs(x), bound):
-        lam = float(_multiplier((Ax + b1)[None], stick)[0])
-    else:
-        lam = float(slip_multipliers(Ax + b1, x, bound, None)[0])
+    lam = 0.0 if con is not None else scalar_multiplier(Ax + b1, x, bound)
     q = np.zeros((2,) + b1.shape)
     q[0] = x
     Aq = np.zeros_like(q)
