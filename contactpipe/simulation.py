@@ -730,7 +730,9 @@ def _start(pb, path, attrs, ckpt):
         kw["maps"] = {"mu": pb.mu}
     st = State.initial(pb.shape, pb.new_memories())
     if path is None:
-        return MemoryWriter(None, pb.x1, pb.x2, names, attrs, **kw), st
+        last, stride = pb.t.size - 1, int(out.stride)
+        written = len(range(0, last + 1, stride)) + (last % stride != 0)
+        return MemoryWriter(None, pb.x1, pb.x2, names, attrs, capacity=written, **kw), st
     if ckpt is not None:
         try:
             saved = ckpt.load()

@@ -124,6 +124,16 @@ def test_writer_round_trip_identical_to_memory_writer(tmp_path):
     ds.close()
 
 
+@pytest.mark.parametrize("capacity", [1, 2, len(TIMES), 100])
+def test_memory_writer_capacity_does_not_change_the_dataset(capacity):
+    """The instants kept in arrays of the expected length, doubled when full: the Dataset
+    is the one of the default capacity, whatever the hint (fewer than the instants, their
+    number, more)."""
+    ds = in_memory(capacity=capacity)
+    xr.testing.assert_identical(ds, in_memory())
+    assert ds.sizes["time"] == len(TIMES)
+
+
 def test_memory_writer_and_save_round_trip(tmp_path):
     mem = in_memory()
     path = save(mem, tmp_path / "mem.nc")

@@ -425,24 +425,37 @@ class MemoryWriter(_StepWriter):
     checks per step (NaN/inf refused, integer and flag types), same precision and
     attributes, the same check at close, so ``MemoryWriter(None, ...).close()`` equals
     ``open_archive`` of what ``ArchiveWriter`` wrote from the same steps (less the
-    ``complete`` attribute).
+    ``complete`` attribute). ``capacity``, the number of instants expected, sizes the
+    arrays that keep them at once (more are taken, the arrays doubled when full; the
+    Dataset is the arrays themselves when full, so that close copies nothing).
     """
 
     def __init__(self, path, x1, x2, variables: list[str], attrs: dict, precision="float64",
-                 compress=True, maps=None):
+                 compress=True, maps=None, capacity=None):
         if path is not None:
             raise ArchiveError(f"MemoryWriter: path={str(path)!r}, expected None (it keeps "
                                "the steps in memory; ArchiveWriter writes a file)")
         super().__init__(x1, x2, variables, attrs, precision, maps)
         self._times: list[float] = []
-        self._data: dict[str, list] = {n: [] for n in self.variables}
+        # one (capacity, ...) array per variable, filled in place and doubled when full:
+        # the Dataset is then views of them, with no copy of every step at close
+        self._capacity = max(1, int(capacity)) if capacity is not None else 16
+        self._data: dict[str, np.ndarray] = {}
 
     def append(self, t: float, values: dict) -> None:
         """Keep one instant: time ``t`` [s] and a value for every declared variable."""
         t, arrays = self._check_step(t, values)
-        self._times.append(t)
+        k = len(self._times)
+        if k == self._capacity and self._data:
+            self._capacity *= 2
+            for name, old in self._data.items():
+                self._data[name] = np.empty((self._capacity,) + old.shape[1:], old.dtype)
+                self._data[name][:k] = old
         for name, arr in arrays.items():
-            self._data[name].append(arr)
+            if name not in self._data:
+                self._data[name] = np.empty((self._capacity,) + arr.shape, arr.dtype)
+            self._data[name][k] = arr
+        self._times.append(t)
         self._commit(t)
 
     def close(self, attrs: dict | None = None) -> xr.Dataset:
@@ -450,8 +463,8 @@ class MemoryWriter(_StepWriter):
         if self._done:
             raise ArchiveError(f"{self._label()}: writer already closed or aborted")
         final = self._final_attrs(attrs)
-        data, self._data = self._data, {}
-        fields = {n: np.stack(data.pop(n)) for n in list(data)}
+        data, self._data, n = self._data, {}, len(self._times)
+        fields = {name: arr if n == len(arr) else arr[:n].copy() for name, arr in data.items()}
         ds = to_dataset(self.x1, self.x2, self._times, {**fields, **self.maps}, final)
         self.abort()
         problems = schema_problems(ds) + content_problems(ds)
