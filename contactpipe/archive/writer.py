@@ -77,7 +77,7 @@ class _StepWriter:
             if isinstance(arr, str):
                 problems.append(arr)
             else:
-                self.maps[name] = arr
+                self.maps[name] = np.array(arr)
         if problems:
             raise ArchiveError(f"{self._label()}: " + join_problems(problems))
         self._dtypes = {n: storage_dtype(n, self.precision) for n in self.variables}
@@ -90,7 +90,8 @@ class _StepWriter:
         return type(self).__name__
 
     def _check_value(self, name, dtype, value):
-        """One variable of one instant, cast to its storage type; or a problem (str)."""
+        """One variable of one instant, cast to its storage type (``value`` itself where it
+        has that type already: not to be kept without a copy); or a problem (str)."""
         arr = np.asarray(value)
         entry = VARIABLES.get(name) or MAPS[name]
         want = (self.x1.size, self.x2.size) if entry["dims"] in (FIELD, MAP) else ()
@@ -113,6 +114,8 @@ class _StepWriter:
             if flags is not None and not np.isin(arr, flags).all():
                 return (f"{name}: values {np.setdiff1d(arr, flags)} outside flag_values "
                         f"{list(flags)}")
+            return arr
+        if arr.dtype == dtype:             # the writers copy it where they keep it
             return arr
         with np.errstate(over="ignore"):   # a float32 overflow is reported just below
             arr = arr.astype(dtype)

@@ -16,9 +16,9 @@ held at zero (:class:`NormalControl` absent) it is the one-row solver of before.
 Two accelerations keep the iterations per solve nearly flat as the grid is refined
 (docs/design-choices.md, "Iterations flat in the grid"):
 
-- *preconditioning*: the CG directions come from the gradient filtered by the inverse of
-  the padded K33 circulant (:meth:`ContactOperator.normal_preconditioner`, one more FFT
-  pair per iteration), which undoes the operator's 1/|ξ| smoothing;
+- *preconditioning*: the CG directions come from the gradient filtered by the symbol of
+  (−Δ)^½ on the unpadded grid (:meth:`ContactOperator.normal_preconditioner`, a quarter
+  of an FFT pair per iteration), which undoes the operator's 1/|ξ| smoothing;
 - *a multilevel start* for a cold solve (no warm start): the same problem on the grid
   coarsened by two (recursively, down to :data:`COARSEST` cells a side), solved to
   :data:`COARSE_TOL`, prolonged bilinearly as the first iterate. The coarse work is

@@ -129,7 +129,7 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
     precondition : bool
         Preconditioned CG with the (−Δ)^½ filter of the normal solve
         (:meth:`ContactOperator.normal_preconditioner`; K11, like K33, behaves as 1/|ξ|):
-        two FFT pairs per iteration instead of one, in about half the iterations at 128²
+        1.25 FFT pairs per iteration instead of one, in about half the iterations at 128²
         and fewer still on finer grids (docs/design-choices.md). False, or an operator
         without the filter: plain CG.
 
