@@ -399,8 +399,28 @@ def _restore_by_shift(x, lo, hi, target, free):
     return out if "out" in locals() else x
 
 
-def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0):
-    """The first iterate (the constraints restored) and its A x."""
+def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0, Ax0_of=None):
+    """The first iterate (the constraints restored) and its A x.
+
+    ``Ax0`` is A of ``Ax0_of`` when that is given, else of ``x0``. Where the iterate
+    differs from it, A x is recomputed; with ``Ax0_of`` given it is updated instead,
+    A x = Ax0 + A (x − Ax0_of), which costs less when ``apply`` skips the blocks of the
+    difference that are zero (the joint solve's pressure, when only slip cells moved).
+    """
+    x, changed, factor = _restored(x0, lo, hi, target, restore, con, movable)
+    if Ax0 is None:
+        return x, apply(x)
+    if Ax0_of is not None:
+        return x, Ax0 + apply(x - Ax0_of)
+    if changed:
+        return x, apply(x)
+    return x, (Ax0 if factor == 1.0 else Ax0 * factor)
+
+
+def _restored(x0, lo, hi, target, restore, con, movable):
+    """The warm start projected onto the bounds and the rows: (x, changed, factor), with
+    ``changed`` False where x is x0 or, for a pure rescaling, ``factor`` x0 (then
+    A x = factor A x0)."""
     x0 = np.asarray(x0, dtype=float)
     x = np.clip(x0, lo, hi)
     clipped = not np.array_equal(x, x0)
@@ -410,8 +430,7 @@ def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0):
             if restore == "scale" and not np.any(x > lo):
                 x = np.where(movable, 1.0, 0.0)     # a uniform start, as Polonsky-Keer's
             x = _restore_rows(x, lo, hi, con, (x > lo) & (x < hi), movable)
-        changed = clipped or not np.array_equal(before, x)
-        return x, (apply(x) if (Ax0 is None or changed) else Ax0)
+        return x, clipped or not np.array_equal(before, x), 1.0
     if restore == "scale":
         s = x.sum()
         if s <= 0:
@@ -419,13 +438,11 @@ def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0):
             s = x.sum()
             clipped = True
         factor = target / s
-        x = x * factor
         # a pure rescaling is linear: A x = factor * A x0
-        return x, (apply(x) if (Ax0 is None or clipped) else Ax0 * factor)
+        return x * factor, clipped, factor
     before = x.copy()
     x = _restore_by_shift(x, lo, hi, target, (x > lo) & (x < hi))
-    changed = clipped or not np.array_equal(before, x)
-    return x, (apply(x) if (Ax0 is None or changed) else Ax0)
+    return x, clipped or not np.array_equal(before, x), 1.0
 
 
 def _restore_rows(x, lo, hi, con, free, movable):
@@ -539,7 +556,7 @@ def _precondition(M, gr, working, con):
 
 
 def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
-           scale=None, Ax0=None, precondition=None) -> BoxResult:
+           scale=None, Ax0=None, precondition=None, Ax0_of=None) -> BoxResult:
     """Solve the bound- and force-constrained quadratic problem described in the module doc.
 
     Parameters
@@ -569,6 +586,9 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         contact that opens entirely, x = 0, converges).
     Ax0 : ndarray, optional
         ``A x0`` if already known (saves one FFT pair).
+    Ax0_of : ndarray, optional
+        The x that ``Ax0`` belongs to, where that is not ``x0``: A x of the start is then
+        updated by A (x − Ax0_of) rather than recomputed (:func:`_start`).
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -582,7 +602,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     con = target if isinstance(target, Constraints) else None
     bounds = _Bounds(lo, hi)
     movable = bounds.movable
-    x, Ax = _start(x0, lo, hi, target, restore, con, movable, apply, Ax0)
+    x, Ax = _start(x0, lo, hi, target, restore, con, movable, apply, Ax0, Ax0_of)
     if Ax is Ax0:
         Ax = np.array(Ax, dtype=float)            # updated in place below
     relative = scale is None and con is not None
