@@ -556,7 +556,8 @@ def _precondition(M, gr, working, con):
 
 
 def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
-           scale=None, Ax0=None, precondition=None, Ax0_of=None) -> BoxResult:
+           scale=None, Ax0=None, precondition=None, Ax0_of=None,
+           update=False) -> BoxResult:
     """Solve the bound- and force-constrained quadratic problem described in the module doc.
 
     Parameters
@@ -589,6 +590,11 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     Ax0_of : ndarray, optional
         The x that ``Ax0`` belongs to, where that is not ``x0``: A x of the start is then
         updated by A (x − Ax0_of) rather than recomputed (:func:`_start`).
+    update : bool
+        After a projection, A x is updated, A x_new + A (x_projected − x_new), rather than
+        recomputed: it pays where ``apply`` skips the zero blocks of its argument (the
+        joint solve: a step that clips shear cells and restores Σq1 moves the shear block
+        alone). False: recomputed, which also clears the rounding carried by the updates.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -653,8 +659,12 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         if bounds.outside(x_new):
             projected = _project_iterate(x_new, lo, hi, target, restore, con, movable)
             err = _change(projected, x, None if relative else scale)
+            if update:                          # A x_new = A x − τ r, then the projection's part
+                Ax -= np.multiply(r, tau, out=step)
+                Ax += apply(projected - x_new)
+            else:
+                Ax = apply(projected)
             x = projected
-            Ax = apply(x)
         else:                                   # x_new − x = −τ t exactly
             moved_by = abs(tau) * float(np.abs(t, out=step).sum())
             if not relative:

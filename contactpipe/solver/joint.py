@@ -127,7 +127,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                 Ax_of, s = np.stack([p, s]), moved
         res = box_cg(apply, b, np.stack([zero, -lag]), np.stack([inf, lag]), rows,
                      np.stack([p, s]), tol=inner, max_iter=max_iter, restore="shift",
-                     Ax0=Ax, precondition=precondition, Ax0_of=Ax_of)
+                     Ax0=Ax, precondition=precondition, Ax0_of=Ax_of, update=True)
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
