@@ -588,13 +588,10 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     Ax0 : ndarray, optional
         ``A x0`` if already known (saves one FFT pair).
     Ax0_of : ndarray, optional
-        The x that ``Ax0`` belongs to, where that is not ``x0``: A x of the start is then
-        updated by A (x − Ax0_of) rather than recomputed (:func:`_start`).
+        The x that ``Ax0`` belongs to, if not ``x0`` (A x then updated: :func:`_start`).
     update : bool
-        After a projection, A x is updated, A x_new + A (x_projected − x_new), rather than
-        recomputed: it pays where ``apply`` skips the zero blocks of its argument (the
-        joint solve: a step that clips shear cells and restores Σq1 moves the shear block
-        alone). False: recomputed, which also clears the rounding carried by the updates.
+        A x after a projection updated, A x_new + A (x_projected − x_new), not recomputed:
+        it pays where ``apply`` skips zero blocks (the joint solve's clipped shear steps).
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -659,12 +656,10 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         if bounds.outside(x_new):
             projected = _project_iterate(x_new, lo, hi, target, restore, con, movable)
             err = _change(projected, x, None if relative else scale)
-            if update:                          # A x_new = A x − τ r, then the projection's part
+            if update:                          # A x_new = A x − τ r, then the projection's
                 Ax -= np.multiply(r, tau, out=step)
                 Ax += apply(projected - x_new)
-            else:
-                Ax = apply(projected)
-            x = projected
+            x, Ax = projected, (Ax if update else apply(projected))
         else:                                   # x_new − x = −τ t exactly
             moved_by = abs(tau) * float(np.abs(t, out=step).sum())
             if not relative:
