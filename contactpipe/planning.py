@@ -199,11 +199,17 @@ CHECK_BYTES = 16 * 2**20
 #: (pyFFTW, one thread: 0.44 ms at 128², 1.6 ms at 256², 10.6 ms at 512² on the 2-core
 #: machine of the README's speed table; the least of the three, 3.4e-10, is the floor).
 FFT_FLOOR_S = 3.4e-10
-#: FFT pairs of one instant, per fourth root of N, by model: from the speed table
-#: (normal solve 40 / 59 / 82 / 130 pairs at 64² ... 512²: about 5 N^(1/4); a one-component
-#: fretting step about as many; the vector form four times; a coupled pass pair six times).
-PAIRS_PER_ROOT = {"none": 5.0, "scalar": 5.0, "vector": 20.0}
-COUPLING_PASSES = 6
+#: FFT pairs of one instant, per fourth root of N, by model, from the README's speed table
+#: and fitted where the pairs grow least, so that ``seconds`` stays a lower bound: a cold
+#: normal solve 20 / 21 / 23 / 28 pairs at 64² ... 512² (28 / 22.6 = 1.2 N^(1/4) at 512²), a
+#: one-component fretting step 20 / 23 / 28 at 64² ... 256², the vector form 112 / 166 at
+#: 64² / 128² (14-15 N^(1/4); 8 leaves room for its preload, which costs fewer sub-steps'
+#: worth than it is counted with).
+PAIRS_PER_ROOT = {"none": 1.2, "scalar": 1.2, "vector": 8.0}
+#: A coupled instant (β ≠ 0) against an uncoupled one, by tangential form: the joint solve
+#: 58 / 70 / 79 against 20 / 23 / 28 pairs (2.8-3.0), the vector form's Gauss-Seidel
+#: passes 223 / 312 against 112 / 166 (1.9-2.0).
+COUPLING_FACTOR = {"none": 1.0, "scalar": 2.8, "vector": 1.9}
 
 
 @dataclass(frozen=True)
@@ -376,8 +382,11 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
         "base": BASE_BYTES,
     }
     per_instant = PAIRS_PER_ROOT[pl.tangential] * n ** 0.25 * \
-        (COUPLING_PASSES if pl.coupling != "none" else 1)
-    substeps = _preload_substeps(scene.solver.preload_substeps) if tangential else 1
+        (COUPLING_FACTOR[pl.tangential] if pl.coupling != "none" else 1.0)
+    # the frictional preload's sub-steps run where the pair couples (β = 0: the load at t0
+    # alone makes no shear, unless T is already there, which this estimate leaves out)
+    substeps = _preload_substeps(scene.solver.preload_substeps) \
+        if tangential and pl.coupling != "none" else 1
     pairs = per_instant * (instants - 1 + substeps)
     m = 4 * n
     # the padded kernels of the set-up are freed before the operators are formed

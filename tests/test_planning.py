@@ -9,7 +9,7 @@ import pytest
 import contactpipe as cp
 from contactpipe.planning import RULES, pair_couples
 
-from helpers import MU, STEEL, W, make_scene
+from helpers import MU, STEEL, W, fretting_scene, make_scene
 
 RIGID = {"material": "rigid"}
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
@@ -228,3 +228,17 @@ def test_plan_does_not_depend_on_grid_or_steps():
     base = cp.plan(scene(halfspace=ALUMINIUM))
     for over in ({"grid": {"points": [16, 24]}}, {"steps": 7}):
         assert cp.plan(scene(halfspace=ALUMINIUM, **over)) == base
+
+
+@pytest.mark.parametrize("halfspace, form", [(STEEL, "scalar"), (ALUMINIUM, "scalar"),
+                                             (ALUMINIUM, "vector")],
+                         ids=["steel-scalar", "aluminium-scalar", "aluminium-vector"])
+def test_pair_estimate_is_below_the_pairs_spent(halfspace, form):
+    """The planning estimate of a fretting loop (32², 10 steps) stays an order-of-magnitude
+    figure below what the run spends, so that ``seconds`` remains a lower bound of the
+    wall time: 0.2 <= estimated / spent <= 1."""
+    from contactpipe.planning import estimate_resources
+    sc = fretting_scene(n=32, steps=10, halfspace=dict(halfspace))
+    est = estimate_resources(sc, cp.plan(sc, tangential=form)).fft_pairs
+    spent = float(cp.simulate(sc, tangential=form).fft_pairs.sum())
+    assert 0.2 <= est / spent <= 1.0, (est, spent)

@@ -3,8 +3,8 @@
 With the history known, the current pressure p and shear q are found by alternating the
 uncoupled normal problem (UNC, shear known) and the uncoupled tangential problem (UTC,
 pressure known) — block Gauss-Seidel — until the pressure changes by less than the
-tolerance relative to W. The loop always ends on a tangential solve, so Coulomb's law
-holds exactly against the final pressure. When the pair does not couple (Dundurs β = 0)
+tolerance relative to W. The loop ends on a tangential solve, so Coulomb's law holds
+exactly against the final pressure. When the pair does not couple (Dundurs β = 0)
 one normal and one tangential solve are exact and no loop runs.
 
 Inexact passes: while the pressure still moves by much more than the tolerance, the inner
@@ -16,9 +16,10 @@ step without changing its converged answer.
 The joint solve: a coupled instant of the scalar form under force control of W and T1
 (uniform μ) is solved instead as one bound-constrained problem over (p, q1) with only the
 bound μp lagged between passes (:mod:`contactpipe.solver.joint`; from nothing in contact,
-a normal solve starts it), then finished by a tangential solve against the final pressure
-like the passes above: the same answer within the tolerance, in fewer FFT pairs (paper
-fig. 3 with coupling, 128²: 159 → 103 pairs per step). Where it does not converge the
+a normal solve starts it), its shear then put on the final pressure's bound
+(:func:`contactpipe.solver.joint.finish`: Coulomb's law exact as after the passes above,
+without another solve): the same answer within the tolerance, in fewer FFT pairs (paper
+fig. 3 with coupling, 128²: 159 → 69 pairs per step). Where it does not converge the
 block Gauss-Seidel passes take over. ``passes`` then counts the joint passes.
 
 The caller gives the solver limits as one :class:`Tolerances` and what it knows of the
