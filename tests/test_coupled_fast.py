@@ -77,6 +77,22 @@ def test_joint_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
     assert_same(fast, slow, 1e-7, 1e-7)
 
 
+def test_joint_finish_keeps_coulomb_and_the_force_rows_exact():
+    """After :func:`joint.finish` (no tangential solve), steel on aluminium, 32², 20 steps:
+    |q1| <= μp with no excess at all, every slipping cell (status 2) on its bound to 1e-12
+    of μp0, and Σq1 Δ = T1, Σp Δ = W to 1e-12 of W at every instant."""
+    ds = cp.simulate(steel_on_aluminium())
+    p, q1 = ds.p.values, ds.q1.values
+    cell = float((ds.x1[1] - ds.x1[0]) * (ds.x2[1] - ds.x2[0]))
+    w = float(ds.W.max())
+    assert (np.abs(q1) - MU * p).max() <= 0.0
+    slip = ds.status.values == 2
+    assert slip.any()
+    assert np.abs(np.abs(q1[slip]) - MU * p[slip]).max() <= 1e-12 * MU * p.max()
+    assert np.abs(q1.sum(axis=(1, 2)) * cell - ds.T1.values).max() <= 1e-12 * w
+    assert np.abs(p.sum(axis=(1, 2)) * cell - ds.W.values).max() <= 1e-12 * w
+
+
 def test_preconditioned_tangential_gives_the_plain_answer(monkeypatch):
     """Steel on aluminium, 32², 20 steps, tolerance 1e-10, block Gauss-Seidel: the
     preconditioned scalar CG against the plain one, within 1e-7 of p0 and μp0 (measured
