@@ -141,6 +141,19 @@ class Constraints:
         out[..., cells] -= (mu @ Cw).reshape(lead + (-1,))
         return out
 
+    def restore(self, x, lo, hi, free, movable):
+        """x with C x = f again, by projecting the free cells (then, when they cannot carry
+        the rows, every movable cell) onto {bounds, C x = f} (:func:`project_rows`)."""
+        out = x
+        for cells in (free, movable):
+            if not cells.any():
+                continue
+            out = project_rows(x, self, cells, "box", lo=lo, hi=hi)
+            tol = 1e-12 * (np.abs(self.target).max(initial=0.0) + np.abs(out).sum())
+            if np.abs(self.residual(out)).max(initial=0.0) <= tol:
+                return out
+        return out
+
 
 class BlockSums(Constraints):
     """Force rows over the blocks of a stacked unknown x (m, N1, N2): Σ x[k] = f[k], one row
@@ -156,8 +169,7 @@ class BlockSums(Constraints):
     def __init__(self, target):
         self.target = np.atleast_1d(np.asarray(target, dtype=float))
         self.m = int(self.target.size)
-        self.sums = True
-        self.rows = None
+        self.rows = None            # no row arrays: every method works block by block
 
     def field(self, lam):
         return np.asarray(lam, dtype=float).reshape(self.m, 1, 1)
@@ -176,7 +188,7 @@ class BlockSums(Constraints):
                 out[k][cells[k]] -= float(z[k][cells[k]].sum()) / np.count_nonzero(cells[k])
         return out
 
-    def restore(self, x, lo, hi, free):
+    def restore(self, x, lo, hi, free, movable=None):
         """Σ x[k] = f[k] again by a clipped shift of block k's free cells (then of every
         cell with room)."""
         return np.stack([_restore_by_shift(x[k], lo[k], hi[k], self.target[k], free[k])
@@ -429,7 +441,7 @@ def _restored(x0, lo, hi, target, restore, con, movable):
         if con.m:
             if restore == "scale" and not np.any(x > lo):
                 x = np.where(movable, 1.0, 0.0)     # a uniform start, as Polonsky-Keer's
-            x = _restore_rows(x, lo, hi, con, (x > lo) & (x < hi), movable)
+            x = con.restore(x, lo, hi, (x > lo) & (x < hi), movable)
         return x, clipped or not np.array_equal(before, x), 1.0
     if restore == "scale":
         s = x.sum()
@@ -443,22 +455,6 @@ def _restored(x0, lo, hi, target, restore, con, movable):
     before = x.copy()
     x = _restore_by_shift(x, lo, hi, target, (x > lo) & (x < hi))
     return x, clipped or not np.array_equal(before, x), 1.0
-
-
-def _restore_rows(x, lo, hi, con, free, movable):
-    """The constraint rows restored by projecting the free cells (then, when they cannot
-    carry them, every movable cell) onto {bounds, C x = f}."""
-    if isinstance(con, BlockSums):
-        return con.restore(x, lo, hi, free)
-    out = x
-    for cells in (free, movable):
-        if not cells.any():
-            continue
-        out = project_rows(x, con, cells, "box", lo=lo, hi=hi)
-        tol = 1e-12 * (np.abs(con.target).max(initial=0.0) + np.abs(out).sum())
-        if np.abs(con.residual(out)).max(initial=0.0) <= tol:
-            return out
-    return out
 
 
 class _Bounds:
@@ -502,7 +498,7 @@ def _project_iterate(x_new, lo, hi, target, restore, con, movable):
     x_new = np.clip(x_new, lo, hi)
     if con is not None:
         if con.m:
-            x_new = _restore_rows(x_new, lo, hi, con, (x_new > lo) & (x_new < hi), movable)
+            x_new = con.restore(x_new, lo, hi, (x_new > lo) & (x_new < hi), movable)
     elif restore == "scale":
         x_new *= target / x_new.sum()
     else:
