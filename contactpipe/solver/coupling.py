@@ -277,11 +277,11 @@ class _Instant:
             inc[i] = lam[j] / (L if i == 5 else 1.0)
         return inc[1:3].copy(), float(inc[5])
 
-    def joint_applies(self, ctl, previous) -> bool:
+    def joint_applies(self) -> bool:
         """The instant can be solved as one problem over (p, q1) (:mod:`.joint`): a coupled
         scalar form under force control of W > 0 and T1 alone, with a uniform μ."""
         return (self.coupled and self.tang == "scalar" and not self.op.rigid
-                and ctl.is_force(0) and self.normal_ctl is None and self.rows is None
+                and self.ctl.is_force(0) and self.normal_ctl is None and self.rows is None
                 and np.ndim(self.mu) == 0 and self.W > 0.0
                 and abs(self.T[0]) <= self.mu * self.W)
 
@@ -305,13 +305,11 @@ class _Instant:
         self.its += j.iterations
         if not j.converged:
             return None
-        self.passes = j.passes
         q = np.zeros_like(prev.q)
         q[0], u_t, domega1 = finish(op, j, self.mu, b[1])
-        self.bound = self.mu * j.p
         n = NormalResult(j.p, j.omega3, u_t[2], j.iterations, j.residual, True)
         return InstantResult(j.p, q, U + u_t, j.omega3, np.array([domega1, 0.0]), self.its,
-                             self.passes, True, j.residual, normal=n, dphi3=0.0)
+                             j.passes, True, j.residual, normal=n, dphi3=0.0)
 
     def capacity(self, p, W):
         """The largest |T| the bounds can carry: mu W, or Σ mu p Δ with a mapped mu [N]."""
@@ -323,13 +321,12 @@ class _Instant:
         return InstantResult(p, q, self.U, getattr(res, "omega3", 0.0), domega, self.its,
                              self.passes, False, res.residual, what)
 
-    def displacement(self, u3, q, t_res, up):
-        """The relative displacement from what the solves computed (few extra FFTs):
-        ``u3`` the normal displacement the solve of p computed (K33 p)."""
+    def displacement(self, n, q, t_res, up):
+        """The relative displacement from what the solves computed (few extra FFTs)."""
         op, u = self.op, self.U.copy()
         if op.rigid:
             return u
-        u[2] += u3
+        u[2] += n.Ap
         if self.tang != "none":
             if self.coupled:
                 u[2] += op.coupling_to_normal(q[0], q[1] if self.vector else None)
@@ -385,11 +382,10 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     ctl = controls if controls is not None else Controls.forces(W, T)
     s = _Instant(op, gap, U, ctl, cell_area, mu, plan, previous, limits)
     tol = limits.tol
-    if s.joint_applies(ctl, previous):
+    if s.joint_applies():
         res = s.joint(tol)
         if res is not None:
             return res
-        s.passes, s.bound = 1, None
     q = previous.q.copy() if s.tang != "none" else np.zeros_like(previous.q)
     worst, change = 0.0, np.inf
 
@@ -449,6 +445,6 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                 break
         worst = max(worst, t_res.residual)
 
-    u = s.displacement(n.Ap, q, t_res, up)
+    u = s.displacement(n, q, t_res, up)
     return InstantResult(p, q, u, n.omega3, domega, s.its, s.passes, True, worst, normal=n,
                          phi=np.asarray(n.phi, float).copy(), dphi3=dphi3)
