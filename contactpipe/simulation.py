@@ -730,9 +730,8 @@ def _start(pb, path, attrs, ckpt):
         kw["maps"] = {"mu": pb.mu}
     st = State.initial(pb.shape, pb.new_memories())
     if path is None:
-        last, stride = pb.t.size - 1, int(out.stride)
-        written = len(range(0, last + 1, stride)) + (last % stride != 0)
-        return MemoryWriter(None, pb.x1, pb.x2, names, attrs, capacity=written, **kw), st
+        return MemoryWriter(None, pb.x1, pb.x2, names, attrs,
+                            capacity=pb.written(pb.t.size - 1), **kw), st
     if ckpt is not None:
         try:
             saved = ckpt.load()

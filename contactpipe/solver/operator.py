@@ -210,13 +210,7 @@ class ContactOperator:
         not on the padded grid, which cost four times the work for the same iterations
         (docs/design-choices.md). Cells of unknown sides are taken square.
         """
-        sigma = self.normal_preconditioner_symbol()
-        return lambda v, out=None: self.conv.periodic_filter(sigma, v, out=out)
-
-    def normal_preconditioner_symbol(self):
-        """The spectrum (real-FFT layout of the n1 x n2 grid, scaled by 1/(n1 n2)) that
-        :meth:`normal_preconditioner` multiplies by (cached)."""
-        if "precondition33" not in self._derived:
+        if "precondition33" not in self._derived:     # the symbol, scaled by 1/(n1 n2)
             conv = self.conv
             d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
             t1 = 2.0 * np.pi * np.fft.fftfreq(conv.n1)[:, None]
@@ -225,7 +219,8 @@ class ContactOperator:
                             + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
             sigma[0, 0] = sigma[sigma > 0].min()
             self._derived["precondition33"] = sigma / (sigma.max() * conv.n1 * conv.n2)
-        return self._derived["precondition33"]
+        sigma = self._derived["precondition33"]
+        return lambda v, out=None: self.conv.periodic_filter(sigma, v, out=out)
 
     def coarse_normal(self):
         """The normal operator on the grid coarsened by two in each direction (cached), or

@@ -7,7 +7,7 @@ stretched in x by λ and scaled by W/(λ² W_from) (Spence 1975; for a sphere λ
 and both fields scale by λ). The sub-steps of a frictional preload (graded fractions
 (k/n)²) grow the contact by tens of per cent each, so the previous sub-step's fields,
 stretched so, start the next one much closer than as they are: measured at 128², steel on
-aluminium, the 8 sub-steps of the run's preload cost 895 FFT pairs instead of 1 241
+aluminium, the 8 sub-steps of the run's preload cost 957 FFT pairs instead of 1 251
 (docs/design-choices.md, "The first instant").
 
 It is only a start: the solves still run to the tolerance from it, and the path memory of
