@@ -80,8 +80,7 @@ class Convolver:
         self.filtered = 0
         t0 = time.perf_counter()
         if backend == "pyfftw":
-            with _PLAN_LOCK:
-                self._plan_pruned(planner)
+            self._plan_pruned(planner)
         else:
             self._rin = np.zeros((self.m1, self.m2))
             self._cin = np.zeros(self.spec_shape, dtype=complex)
@@ -100,29 +99,46 @@ class Convolver:
         a pair costs 0.72-0.80 of the unpruned 2D plan's at 64²-512², to rounding the
         same result (docs/design-choices.md).
         """
-        m1, n1, m2 = self.m1, self.n1, self.m2
-        flags = (planner,)
+        n1, m2 = self.n1, self.m2
+        self._planner = planner
         self._rin = pyfftw.zeros_aligned((n1, m2), dtype="float64")
-        self._cout = pyfftw.zeros_aligned(self.spec_shape, dtype="complex128")
         self._cin = pyfftw.zeros_aligned(self.spec_shape, dtype="complex128")
         self._rout = pyfftw.zeros_aligned((n1, m2), dtype="float64")
         kw = dict(threads=self.threads)
-        self._fwd_rows = pyfftw.FFTW(self._rin, self._cout[:n1], axes=(1,),
-                                     direction="FFTW_FORWARD", flags=flags, **kw)
-        self._fwd_cols = pyfftw.FFTW(self._cout, self._cout, axes=(0,),
-                                     direction="FFTW_FORWARD", flags=flags, **kw)
-        self._inv_cols = pyfftw.FFTW(self._cin, self._cin, axes=(0,),
-                                     direction="FFTW_BACKWARD", flags=flags, **kw)
-        self._inv_rows = pyfftw.FFTW(self._cin[:n1], self._rout, axes=(1,),
-                                     direction="FFTW_BACKWARD",
-                                     flags=flags + ("FFTW_DESTROY_INPUT",), **kw)
+        self._slots = []
+        self._cout = self._forward_slot(0)[0]
+        with _PLAN_LOCK:
+            self._inv_cols = pyfftw.FFTW(self._cin, self._cin, axes=(0,),
+                                         direction="FFTW_BACKWARD", flags=(planner,), **kw)
+            self._inv_rows = pyfftw.FFTW(self._cin[:n1], self._rout, axes=(1,),
+                                         direction="FFTW_BACKWARD",
+                                         flags=(planner, "FFTW_DESTROY_INPUT"), **kw)
 
-    def _execute_forward(self, x):
-        """The spectrum of the zero-padded x, left in ``self._cout`` (pyFFTW)."""
+    def _forward_slot(self, n):
+        """The n-th forward spectrum buffer and its two plans (made when first asked
+        for; the plans after the first come from FFTW's wisdom): a block product keeps
+        each input's spectrum in its own buffer and copies none (the copy was 9 % of a
+        2 x 2 product at 128²)."""
+        while len(self._slots) <= n:
+            cout = pyfftw.zeros_aligned(self.spec_shape, dtype="complex128")
+            kw = dict(threads=self.threads, flags=(self._planner,))
+            with _PLAN_LOCK:
+                rows = pyfftw.FFTW(self._rin, cout[:self.n1], axes=(1,),
+                                   direction="FFTW_FORWARD", **kw)
+                cols = pyfftw.FFTW(cout, cout, axes=(0,), direction="FFTW_FORWARD", **kw)
+            self._slots.append((cout, rows, cols))
+        return self._slots[n]
+
+    def _execute_forward(self, x, slot=0):
+        """The spectrum of the zero-padded x, left in (and returned as) the buffer of
+        forward slot ``slot`` (pyFFTW)."""
+        cout, rows, cols = self._slots[slot] if slot < len(self._slots) \
+            else self._forward_slot(slot)
         self._rin[:, :self.n2] = x              # the row's padded half stays zero
-        self._fwd_rows.execute()
-        self._cout[self.n1:] = 0.0               # the padded rows' spectra
-        self._fwd_cols.execute()
+        rows.execute()
+        cout[self.n1:] = 0.0                    # the padded rows' spectra
+        cols.execute()
+        return cout
 
     def _execute_inverse(self):
         """The inverse transform of ``self._cin``; its kept block is
@@ -301,16 +317,16 @@ class Convolver:
         return out
 
     def _convolve_matrix_fftw(self, khat, xs, out):
-        """:meth:`convolve_matrix` on pyFFTW's buffers: the last input's spectrum stays in
-        the forward plan's output (the others are copied out of it), and each output's
-        sum of products is formed in the inverse plan's input, so no spectrum is copied
-        twice (at 128² a spectrum copy is a third of a transform)."""
-        live = [j for j, x in enumerate(xs) if x is not None]
+        """:meth:`convolve_matrix` on pyFFTW's buffers: each input's spectrum stays in its
+        own forward buffer (:meth:`_forward_slot`), and each output's sum of products is
+        formed in the inverse plan's input, so no spectrum is copied."""
         specs = [None] * len(xs)
-        for n, j in enumerate(live):
-            self.forward_count += 1
-            self._execute_forward(xs[j])
-            specs[j] = self._cout if n == len(live) - 1 else self._cout.copy()
+        n = 0
+        for j, x in enumerate(xs):
+            if x is not None:
+                self.forward_count += 1
+                specs[j] = self._execute_forward(x, n)
+                n += 1
         if out is None:
             out = np.zeros((len(khat), self.n1, self.n2))
         for i, row in enumerate(khat):
