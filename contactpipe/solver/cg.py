@@ -170,6 +170,7 @@ class BlockSums(Constraints):
         self.target = np.atleast_1d(np.asarray(target, dtype=float))
         self.m = int(self.target.size)
         self.rows = None            # no row arrays: every method works block by block
+        self._buf = None            # scratch of x's shape for the masked sums
 
     def field(self, lam):
         return np.asarray(lam, dtype=float).reshape(self.m, 1, 1)
@@ -177,22 +178,38 @@ class BlockSums(Constraints):
     def sums_of(self, x):
         return x.reshape(self.m, -1).sum(axis=1)
 
+    def _masked_sums(self, v, cells):
+        """(Σ over block k's cells of v[k], the number of those cells), each (m,): by a
+        product with the mask in a kept scratch array (a boolean-indexed copy per block
+        cost 1.7x / 3x more in fit / keep at 128²)."""
+        buf = self._buf
+        if buf is None or buf.shape != v.shape:
+            buf = self._buf = np.empty(v.shape)
+        flat = cells.reshape(self.m, -1)
+        sums = np.multiply(v, cells, out=buf).reshape(self.m, -1).sum(axis=1)
+        return sums, np.count_nonzero(flat, axis=1)
+
     def fit(self, g, cells):
-        return np.array([float(g[k][cells[k]].mean()) if cells[k].any() else 0.0
-                         for k in range(self.m)])
+        sums, counts = self._masked_sums(g, cells)
+        return np.where(counts > 0, sums / np.maximum(counts, 1), 0.0)
 
     def keep(self, z, cells):
-        out = z.copy()
-        for k in range(self.m):
-            if cells[k].any():
-                out[k][cells[k]] -= float(z[k][cells[k]].sum()) / np.count_nonzero(cells[k])
-        return out
+        sums, counts = self._masked_sums(z, cells)
+        mean = (sums / np.maximum(counts, 1)).reshape(self.m, 1, 1)
+        return z - np.multiply(cells, mean, out=self._buf)
 
     def restore(self, x, lo, hi, free, movable=None):
         """Σ x[k] = f[k] again by a clipped shift of block k's free cells (then of every
-        cell with room)."""
-        return np.stack([_restore_by_shift(x[k], lo[k], hi[k], self.target[k], free[k])
-                         for k in range(self.m)])
+        cell with room). A block whose sum already holds to the shift's own acceptance
+        (1e-12 of Σ|x[k]|: a block the projection did not clip, off only by the rounding
+        of the steps) is left as it is, so that the update of A x after the projection
+        skips it (1.5 FFT pairs instead of 2 in the joint solve)."""
+        out = x.copy()
+        for k in range(self.m):
+            err = abs(float(x[k].sum()) - self.target[k])
+            if err > 1e-12 * (abs(self.target[k]) + float(np.abs(x[k]).sum())):
+                out[k] = _restore_by_shift(x[k], lo[k], hi[k], self.target[k], free[k])
+        return out
 
 
 # --------------------------------------------------------------------------- projections
