@@ -420,9 +420,15 @@ def _restore_by_shift(x, lo, hi, target, free):
             continue
         xs, ls, hs = x[cells], lo[cells], hi[cells]
         need = target - (x.sum() - xs.sum())
-        c = _shift_root(xs, ls, hs, need)
+        # the plain shift first: where it leaves every cell strictly inside its bounds it
+        # is the root itself (Σ(xs + c) = need), and the root-finder is not needed; a
+        # sum already off by rounding only (the root-finder's own acceptance) is kept
+        d = need - xs.sum()
+        ys = xs if abs(d) <= 1e-14 * (abs(need) + np.abs(xs).sum()) else xs + d / xs.size
+        if not ((ys > ls).all() and (ys < hs).all()):
+            ys = np.clip(xs + _shift_root(xs, ls, hs, need), ls, hs)
         out = x.copy()
-        out[cells] = np.clip(xs + c, ls, hs)
+        out[cells] = ys
         if abs(out.sum() - target) <= 1e-12 * (abs(target) + np.abs(out).sum()):
             return out
     return out if "out" in locals() else x
