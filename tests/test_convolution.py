@@ -55,10 +55,11 @@ def test_backends_agree_and_count_pairs():
 
 @pytest.mark.skipif(not HAVE_PYFFTW, reason="pyfftw not installed")
 def test_block_convolution_on_fftw_buffers_agrees_with_scipy():
-    """convolve_matrix on pyFFTW's own buffers (the last input's spectrum left in the plan's
-    output, the products summed in the inverse plan's input) gives scipy's numbers, with a
-    zero input, a vanishing kernel and an output that receives nothing, and the same
-    transform counts."""
+    """convolve_matrix on pyFFTW's own buffers (each input's spectrum in its own forward
+    buffer, the products summed in the inverse plan's input, the transforms pruned of the
+    padding) gives scipy's numbers, with a zero input, a vanishing kernel and an output that
+    receives nothing, and the same transform counts; then with three live inputs (a third
+    buffer made on demand), twice, so that no buffer of one call leaks into the next."""
     rng = np.random.default_rng(3)
     n1, n2 = 12, 10
     k = body_kernels(n1, n2, 1e-5, 2e-5, 210e9, 0.3)
@@ -71,6 +72,12 @@ def test_block_convolution_on_fftw_buffers_agrees_with_scipy():
     np.testing.assert_allclose(ua, ub, rtol=1e-12, atol=1e-12 * np.abs(ub).max())
     assert not ua[2].any() and ua[3].any()        # nothing reaches row 2
     assert (a.forward_count, a.inverse_count) == (b.forward_count, b.inverse_count) == (2, 3)
+    xs3 = [rng.normal(size=(n1, n2)) for _ in range(3)]
+    for _ in range(2):
+        ua = a.convolve_matrix([[spec(a, c) for c in row] for row in layout], xs3)
+        ub = b.convolve_matrix([[spec(b, c) for c in row] for row in layout], xs3)
+        np.testing.assert_allclose(ua, ub, rtol=1e-12, atol=1e-12 * np.abs(ub).max())
+        xs3 = xs3[::-1]
 
 
 @pytest.mark.parametrize("backend", ["scipy"] + (["pyfftw"] if HAVE_PYFFTW else []))

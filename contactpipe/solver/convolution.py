@@ -96,7 +96,7 @@ class Convolver:
         n1 field rows alone (the padded half of each row is zero), then along x1 over the
         whole column; the inverse runs along x1 over the whole column, then along x2 on
         the n1 rows that are kept. Each transform so skips half of one of its two passes:
-        a pair costs 0.72-0.80 of the unpruned 2D plan's at 64²-512², to rounding the
+        a pair costs 0.76-0.80 of the unpruned 2D plan's at 64²-512², to rounding the
         same result (docs/design-choices.md).
         """
         n1, m2 = self.n1, self.m2
