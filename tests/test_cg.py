@@ -473,3 +473,53 @@ def test_preconditioned_box_cg_with_rows_meets_kkt(seed):
     assert plain.converged and fast.converged
     np.testing.assert_allclose(fast.x, plain.x, rtol=0, atol=1e-9 * np.abs(plain.x).max())
     np.testing.assert_allclose(con.residual(fast.x), 0.0, atol=1e-10 * 3.0)
+
+
+@pytest.mark.parametrize("need_shift", [0.05, 0.6])
+def test_restore_by_shift_is_one_clipped_shift_of_the_free_cells(need_shift):
+    """_restore_by_shift (the force restore after a projection): Σx = target to 1e-12, every
+    cell within its bounds, the held cells untouched, and the free cells moved by one common
+    shift c, clipped at their bounds. A small deficit (0.05 per free cell) is met by the
+    plain shift with no cell crossing a bound; a larger one (0.6) sends cells to their bounds
+    and needs the root-finder. The result equals the Euclidean projection of the free cells
+    onto {bounds, Σ = need} (project_box_sum) to 1e-12."""
+    from contactpipe.solver.cg import _restore_by_shift
+    rng = np.random.default_rng(11)
+    n = 200
+    hi = rng.uniform(1.0, 2.0, n)
+    lo = -hi
+    x = rng.uniform(-0.9, 0.9, n) * hi
+    free = rng.random(n) < 0.7
+    x[~free] = np.where(rng.random((~free).sum()) < 0.5, lo[~free], hi[~free])
+    target = x.sum() + need_shift * free.sum()
+    out = _restore_by_shift(x.copy(), lo, hi, target, free)
+    assert abs(out.sum() - target) <= 1e-12 * np.abs(out).sum()
+    assert np.all(out >= lo) and np.all(out <= hi)
+    np.testing.assert_array_equal(out[~free], x[~free])
+    d = (out - x)[free]
+    inside = (out[free] > lo[free]) & (out[free] < hi[free])
+    assert inside.any()
+    c = d[inside].mean()
+    np.testing.assert_allclose(d[inside], c, rtol=0, atol=1e-12)
+    assert np.all(np.abs(d[~inside]) <= abs(c) + 1e-12)       # clipped: moved less than c
+    crossed = int((~inside).sum())
+    assert (crossed == 0) if need_shift < 0.1 else (crossed > 0)
+    ref = project_box_sum(x[free], lo[free], hi[free], target - x[~free].sum())
+    np.testing.assert_allclose(out[free], ref, rtol=0, atol=1e-12)
+
+
+def test_block_sums_restore_leaves_a_block_that_holds():
+    """BlockSums.restore: a block whose sum is off by rounding only is returned bit for bit
+    (so that the update of A x after a projection can skip it); a block that is off is
+    shifted back onto its row."""
+    from contactpipe.solver.cg import BlockSums
+    rng = np.random.default_rng(12)
+    x = np.stack([rng.uniform(0.1, 1.0, (6, 5)), rng.uniform(-0.5, 0.5, (6, 5))])
+    lo = np.stack([np.zeros((6, 5)), -np.ones((6, 5))])
+    hi = np.stack([np.full((6, 5), np.inf), np.ones((6, 5))])
+    target = [float(x[0].sum()) * (1 + 1e-15), float(x[1].sum()) + 0.3]
+    free = (x > lo) & (x < hi)
+    out = BlockSums(target).restore(x, lo, hi, free)
+    np.testing.assert_array_equal(out[0], x[0])
+    assert abs(out[1].sum() - target[1]) <= 1e-12 * np.abs(out[1]).sum()
+    assert not np.array_equal(out[1], x[1])
