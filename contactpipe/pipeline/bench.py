@@ -144,10 +144,16 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
                           "tangential_force": [0.0, Ts, -Ts, Ts]},
                     grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
                     solver={"fft": backend, "threads": threads})
+        # the floor pair just before and after the run: this shared machine's speed
+        # varies, and wall / floor is the run's time in floor pairs, comparable across runs
+        floor = _floor_ms(n, backend, threads)[0]
         t0 = time.perf_counter()
         ds = simulate(sc, tangential=form)
         wall = time.perf_counter() - t0
-        print(f"  {form:>6}: {wall:.1f} s, {ds.fft_pairs.values.sum() / (steps + 1):.0f} FFT pairs "
+        floor = min(floor, _floor_ms(n, backend, threads)[0])
+        print(f"  {form:>6}: {wall:.1f} s = {wall / floor * 1e3:,.0f} floor pairs of "
+              f"{floor:.3f} ms (the run spent {ds.fft_pairs.values.sum():,.0f}), "
+              f"{ds.fft_pairs.values.sum() / (steps + 1):.0f} FFT pairs "
               f"per step ({ds.fft_pairs.values[1:].mean():.0f} after the first instant's "
               f"{int(ds.fft_pairs.values[0])}, preload estimate "
               f"{int(ds.attrs.get('preload_estimate_fft_pairs', 0))}), "
