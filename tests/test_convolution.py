@@ -72,6 +72,9 @@ def test_block_convolution_on_fftw_buffers_agrees_with_scipy():
     np.testing.assert_allclose(ua, ub, rtol=1e-12, atol=1e-12 * np.abs(ub).max())
     assert not ua[2].any() and ua[3].any()        # nothing reaches row 2
     assert (a.forward_count, a.inverse_count) == (b.forward_count, b.inverse_count) == (2, 3)
+    c = Convolver(n1, n2, backend="pyfftw", threads=2)      # the pruned plans, threaded
+    uc = c.convolve_matrix([[spec(c, comp) for comp in row] for row in layout], xs)
+    np.testing.assert_allclose(uc, ub, rtol=1e-12, atol=1e-12 * np.abs(ub).max())
     xs3 = [rng.normal(size=(n1, n2)) for _ in range(3)]
     for _ in range(2):
         ua = a.convolve_matrix([[spec(a, c) for c in row] for row in layout], xs3)
