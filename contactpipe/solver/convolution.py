@@ -83,7 +83,6 @@ class Convolver:
             self._plan_pruned(planner)
         else:
             self._rin = np.zeros((self.m1, self.m2))
-            self._cin = np.zeros(self.spec_shape, dtype=complex)
         self.plan_time_s = time.perf_counter() - t0
         self._tmp = np.zeros(self.spec_shape, dtype=complex)
         self._periodic = {}
@@ -106,7 +105,7 @@ class Convolver:
         self._rout = pyfftw.zeros_aligned((n1, m2), dtype="float64")
         kw = dict(threads=self.threads)
         self._slots = []
-        self._cout = self._forward_slot(0)[0]
+        self._forward_slot(0)
         with _PLAN_LOCK:
             self._inv_cols = pyfftw.FFTW(self._cin, self._cin, axes=(0,),
                                          direction="FFTW_BACKWARD", flags=(planner,), **kw)
@@ -132,8 +131,7 @@ class Convolver:
     def _execute_forward(self, x, slot=0):
         """The spectrum of the zero-padded x, left in (and returned as) the buffer of
         forward slot ``slot`` (pyFFTW)."""
-        cout, rows, cols = self._slots[slot] if slot < len(self._slots) \
-            else self._forward_slot(slot)
+        cout, rows, cols = self._forward_slot(slot)
         self._rin[:, :self.n2] = x              # the row's padded half stays zero
         rows.execute()
         cout[self.n1:] = 0.0                    # the padded rows' spectra
@@ -229,10 +227,10 @@ class Convolver:
         """Spectrum of the zero-padded field ``x`` (n1 x n2). Returns a new array or ``out``."""
         self.forward_count += 1
         if self.backend == "pyfftw":
-            self._execute_forward(x)
+            spec = self._execute_forward(x)
             if out is None:
-                return self._cout.copy()
-            out[...] = self._cout
+                return spec.copy()
+            out[...] = spec
             return out
         self._rin[:self.n1, :self.n2] = x
         spec = scipy.fft.rfft2(self._rin, workers=self.threads)
@@ -265,8 +263,7 @@ class Convolver:
         if self.backend == "pyfftw":      # no intermediate copies on the main path
             self.forward_count += 1
             self.inverse_count += 1
-            self._execute_forward(x)
-            np.multiply(self._cout, khat, out=self._cin)
+            np.multiply(self._execute_forward(x), khat, out=self._cin)
             self._execute_inverse()
             block = self._rout[:, :self.n2]
             if out is None:
