@@ -134,6 +134,29 @@ def test_memory_writer_capacity_does_not_change_the_dataset(capacity):
     assert ds.sizes["time"] == len(TIMES)
 
 
+@pytest.mark.parametrize("capacity", [1, len(TIMES)])
+def test_memory_writer_mapped_arrays_give_the_same_dataset(monkeypatch, capacity):
+    """Arrays kept on anonymous memory maps (the large ones, here every one) hold the
+    same steps as numpy's heap arrays, through the doublings (capacity 1), and the
+    Dataset keeps using them after the writer is gone (the map lives with the arrays)."""
+    from contactpipe.archive import writer
+    heap = in_memory(capacity=capacity)
+    monkeypatch.setattr(writer, "MAPPED_BYTES", 1)
+    mapped = in_memory(capacity=capacity)
+    assert _on_map(mapped["p"].values) and not _on_map(heap["p"].values)
+    xr.testing.assert_identical(mapped, heap)
+
+
+def _on_map(a) -> bool:
+    """Whether an array's memory is (a view of) an mmap object."""
+    import mmap
+    while a is not None:
+        if isinstance(a, mmap.mmap):
+            return True
+        a = getattr(a, "base", None) if not isinstance(a, memoryview) else a.obj
+    return False
+
+
 def test_memory_writer_and_save_round_trip(tmp_path):
     mem = in_memory()
     path = save(mem, tmp_path / "mem.nc")
