@@ -475,6 +475,27 @@ def test_preconditioned_box_cg_with_rows_meets_kkt(seed):
     np.testing.assert_allclose(con.residual(fast.x), 0.0, atol=1e-10 * 3.0)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_box_cg_deferred_products_are_returned(seed):
+    """``update`` with ``defer``: the products of projections left out of A x come back
+    in ``pending``, A x = A (x − pending) to rounding (1e-12), n = 40 two-sided, every
+    projection deferred; with ``defer`` = 0 nothing is pending and A x = A x; with the
+    default-sized 0.1 the point is the exact one's (defer = 0) within 1e-9 of max|x|."""
+    A, b, lo, hi, target = problem(300 + seed, 40, "two-sided")
+    x0 = np.zeros(40)
+    kw = dict(tol=1e-11, max_iter=2000, restore="shift", update=True)
+    all_ = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=1e300, **kw)
+    assert all_.pending is not None and np.any(all_.pending)
+    np.testing.assert_allclose(all_.Ax, A @ (all_.x - all_.pending), rtol=0,
+                               atol=1e-12 * np.abs(all_.Ax).max())
+    exact = box_cg(lambda x: A @ x, b, lo, hi, target, x0, **kw)
+    assert exact.pending is None and exact.converged
+    np.testing.assert_allclose(exact.Ax, A @ exact.x, rtol=0, atol=1e-12 * np.abs(exact.Ax).max())
+    some = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=0.1, **kw)
+    assert some.converged
+    np.testing.assert_allclose(some.x, exact.x, rtol=0, atol=1e-9 * np.abs(exact.x).max())
+
+
 @pytest.mark.parametrize("need_shift", [0.05, 0.6])
 def test_restore_by_shift_is_one_clipped_shift_of_the_free_cells(need_shift):
     """_restore_by_shift (the force restore after a projection): Σx = target to 1e-12, every

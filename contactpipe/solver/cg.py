@@ -62,6 +62,7 @@ class BoxResult:
     iterations: int
     residual: float        # last relative change Σ|Δx| / scale
     converged: bool
+    pending: np.ndarray | None = None   # with ``defer``: Ax is A (x − pending)
 
 
 class Constraints:
@@ -572,7 +573,7 @@ def _precondition(M, gr, working, con):
 
 def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
            scale=None, Ax0=None, precondition=None, Ax0_of=None,
-           update=False) -> BoxResult:
+           update=False, defer=0.0) -> BoxResult:
     """Solve the bound- and force-constrained quadratic problem described in the module doc.
 
     Parameters
@@ -607,6 +608,12 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     update : bool
         A x after a projection updated, A x_new + A (x_projected − x_new), not recomputed:
         it pays where ``apply`` skips zero blocks (the joint solve's clipped shear steps).
+    defer : float
+        With ``update``: a projection that moved x by less than ``defer`` x ``tol``
+        (relative, summed over the projections deferred so far) leaves its product out of
+        A x, and the search goes on with that A x; the differences left out are returned
+        in ``BoxResult.pending`` (A x is then A (x − pending)), for the caller to fold
+        into its next product. 0: A x always exact.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -633,6 +640,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     working_old = None
     err = np.inf
     lam = 0.0 if con is None else np.zeros(con.m)
+    pending, lag = None, 0.0        # projections left out of A x (``defer``)
     it = 0
     for it in range(1, max_iter + 1):
         np.add(Ax, b, out=g)
@@ -673,7 +681,18 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             err = _change(projected, x, None if relative else scale)
             if update:                          # A x_new = A x − τ r, then the projection's
                 Ax -= np.multiply(r, tau, out=step)
-                Ax += apply(projected - x_new)
+                d = np.subtract(projected, x_new, out=x_new)
+                size = _change(d, 0.0, max(float(np.abs(projected).sum()), 1e-300)
+                               if relative else scale) if defer else np.inf
+                if lag + size <= defer * tol:   # measured as err is
+                    lag += size
+                    pending = d.copy() if pending is None else np.add(pending, d,
+                                                                      out=pending)
+                else:
+                    if pending is not None:
+                        d += pending
+                        pending, lag = None, 0.0
+                    Ax += apply(d)
             x, Ax = projected, (Ax if update else apply(projected))
         else:                                   # x_new − x = −τ t exactly
             moved_by = abs(tau) * float(np.abs(t, out=step).sum())
@@ -689,7 +708,9 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             break
         if err < tol:
             break
-    return _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
+    res = _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
+    res.pending = pending
+    return res
 
 
 def _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale) -> BoxResult:

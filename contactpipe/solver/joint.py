@@ -23,7 +23,10 @@ pressure answers through K31 only, so a pass cuts the pressure change by about �
 cuts it by β²-like factors of 1/20-1/50. Inner tolerances follow the same inexact
 schedule as the block Gauss-Seidel passes; the passes stop when one at the full tolerance
 moves p by less than the tolerance, or by so little that the next would at the contraction
-just measured. :func:`finish` then puts the shear on the final pressure's bound, so that
+just measured. A projection that moves the iterate by less than a tenth of the pass's
+inner tolerance leaves its product out of A x until a larger one, or the next pass's start,
+takes it in (:data:`DEFER`; the last pass's are taken in before its A x is returned).
+:func:`finish` then puts the shear on the final pressure's bound, so that
 Coulomb's law holds exactly, and builds the displacement from the products the solve
 kept (docs/design-choices.md, "The coupled instant").
 """
@@ -48,6 +51,10 @@ PASS_TOLERANCE_FRACTION = 1e-2
 #: A pass whose inner tolerance would be within this factor of the full one runs at the
 #: full tolerance, so that it can be the last [1].
 FULL_WITHIN = 10.0
+#: A projection that moves the iterate by less than this fraction of the pass's inner
+#: tolerance leaves its product out of A x until the next one that does not, or the next
+#: pass's start, takes it in (``box_cg(defer=...)``) [1].
+DEFER = 0.1
 
 
 @dataclass
@@ -115,19 +122,25 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     zero, inf = np.zeros_like(p0), np.full_like(p0, np.inf)
     p, s = np.array(p0, dtype=float), np.array(q0, dtype=float) / mu
     lag_old, Ax, its, change = None, None, 0, np.inf
+    pending = None          # the last pass's projections not yet in its A x
     inner = max(tol, FIRST_PASS_TOLERANCE)
     for passes in range(1, max_passes + 1):
         lag = p                                   # the bound of s: |s| <= p (lagged)
         Ax_of = None
         if lag_old is not None:                   # slip cells stay on their moved bound
             moved = follow_bound(s, lag_old, lag)
-            if not np.array_equal(moved, s):
+            if not np.array_equal(moved, s) or pending is not None:
                 # A x of the moved start, updated by the shear block alone (1.5 FFT pairs
-                # instead of 2 for a new product); the start's force rows move s only
+                # instead of 2 for a new product; the start's force rows move s only),
+                # and by what the last pass left out of it
                 Ax_of, s = np.stack([p, s]), moved
+                if pending is not None:
+                    Ax_of -= pending
         res = box_cg(apply, b, np.stack([zero, -lag]), np.stack([inf, lag]), rows,
                      np.stack([p, s]), tol=inner, max_iter=max_iter, restore="shift",
-                     Ax0=Ax, precondition=precondition, Ax0_of=Ax_of, update=True)
+                     Ax0=Ax, precondition=precondition, Ax0_of=Ax_of, update=True,
+                     defer=DEFER)
+        pending = res.pending
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
@@ -145,9 +158,14 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         # bound is then below the tolerance)
         if last and (change < tol or (0.0 < change_old < np.inf
                                       and change * min(1.0, change / change_old) < tol)):
+            omega3 = float(res.multiplier[0])
+            if pending is not None:               # the product made exact at the end
+                Ax = Ax + apply(pending)
+                x = np.stack([p, s])
+                omega3 = float(rows.fit(Ax + b, (x > np.stack([zero, -lag]))
+                                        & (x < np.stack([inf, lag])))[0])
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
-            return JointResult(p, mu * s, mu * lag, float(res.multiplier[0]), Ax, its,
-                               passes, True, change)
+            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True, change)
     return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False, change)
 
 
