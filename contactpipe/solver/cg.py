@@ -609,11 +609,9 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         A x after a projection updated, A x_new + A (x_projected − x_new), not recomputed:
         it pays where ``apply`` skips zero blocks (the joint solve's clipped shear steps).
     defer : float
-        With ``update``: a projection that moved x by less than ``defer`` x ``tol``
-        (relative, summed over the projections deferred so far) leaves its product out of
-        A x, and the search goes on with that A x; the differences left out are returned
-        in ``BoxResult.pending`` (A x is then A (x − pending)), for the caller to fold
-        into its next product. 0: A x always exact.
+        With ``update``: projections that move x by less than ``defer`` x ``tol`` in all
+        leave their products out of A x (:class:`_Deferred`); what is left out comes back
+        in ``BoxResult.pending`` (A x = A (x − pending)). 0: A x always exact.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -636,12 +634,9 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     # preallocated fields: the element-wise work runs in place (ufuncs with out=)
     t = np.zeros_like(x)
     g, gr, grw, step, x_new = (np.empty_like(x) for _ in range(5))
-    G_old = 1.0
-    working_old = None
-    err = np.inf
+    G_old, working_old, err = 1.0, None, np.inf
     lam = 0.0 if con is None else np.zeros(con.m)
-    pending, lag = None, 0.0        # projections left out of A x (``defer``)
-    it = 0
+    deferred, it = _Deferred(defer * tol), 0
     for it in range(1, max_iter + 1):
         np.add(Ax, b, out=g)
         free = bounds.free(x)
@@ -681,26 +676,11 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             err = _change(projected, x, None if relative else scale)
             if update:                          # A x_new = A x − τ r, then the projection's
                 Ax -= np.multiply(r, tau, out=step)
-                d = np.subtract(projected, x_new, out=x_new)
-                size = _change(d, 0.0, max(float(np.abs(projected).sum()), 1e-300)
-                               if relative else scale) if defer else np.inf
-                if lag + size <= defer * tol:   # measured as err is
-                    lag += size
-                    pending = d.copy() if pending is None else np.add(pending, d,
-                                                                      out=pending)
-                else:
-                    if pending is not None:
-                        d += pending
-                        pending, lag = None, 0.0
-                    Ax += apply(d)
+                deferred.add(apply, Ax, np.subtract(projected, x_new, out=x_new),
+                             projected if relative else scale)
             x, Ax = projected, (Ax if update else apply(projected))
         else:                                   # x_new − x = −τ t exactly
-            moved_by = abs(tau) * float(np.abs(t, out=step).sum())
-            if not relative:
-                err = moved_by / scale
-            else:
-                err = 0.0 if moved_by == 0.0 else \
-                    moved_by / max(float(np.abs(x_new, out=step).sum()), 1e-300)
+            err = _step_change(tau, t, x_new, None if relative else scale, step)
             x, x_new = x_new, x
             Ax -= np.multiply(r, tau, out=step)
         if not err >= 0.0:                      # NaN: the iterate is lost
@@ -709,8 +689,45 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         if err < tol:
             break
     res = _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
-    res.pending = pending
+    res.pending = deferred.pending
     return res
+
+
+def _step_change(tau, t, x_new, scale, buf) -> float:
+    """:func:`_change` of an unprojected step x_new = x − τ t, from |τ| Σ|t| (``buf``:
+    scratch of x's shape)."""
+    moved_by = abs(tau) * float(np.abs(t, out=buf).sum())
+    if scale is not None:
+        return moved_by / scale
+    if moved_by == 0.0:
+        return 0.0
+    return moved_by / max(float(np.abs(x_new, out=buf).sum()), 1e-300)
+
+
+class _Deferred:
+    """The products of projections that :func:`box_cg` (``defer``) leaves out of A x:
+    while their changes, summed relative to the iterate as the convergence measure is,
+    stay within ``limit``, the differences wait in ``pending``; the next projection
+    beyond it takes them into its own product."""
+
+    def __init__(self, limit):
+        self.limit, self.lag, self.pending = limit, 0.0, None
+
+    def add(self, apply, Ax, d, norm):
+        """A x += A d now (with what waits), or d kept; ``norm`` is the convergence
+        measure's scale, or the projected iterate whose Σ|x| it is."""
+        if self.limit > 0.0:
+            size = float(np.abs(d).sum()) / (norm if np.ndim(norm) == 0 else
+                                             max(float(np.abs(norm).sum()), 1e-300))
+            if self.lag + size <= self.limit:
+                self.lag += size
+                self.pending = d.copy() if self.pending is None else \
+                    np.add(self.pending, d, out=self.pending)
+                return
+        if self.pending is not None:
+            d += self.pending
+            self.lag, self.pending = 0.0, None
+        Ax += apply(d)
 
 
 def _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale) -> BoxResult:
