@@ -673,11 +673,11 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         np.subtract(x, np.multiply(t, tau, out=step), out=x_new)
         if bounds.outside(x_new):
             projected = _project_iterate(x_new, lo, hi, target, restore, con, movable)
-            err = _change(projected, x, None if relative else scale)
+            norm = max(float(np.abs(projected).sum()), 1e-300) if relative else scale
+            err = _change(projected, x, norm)
             if update:                          # A x_new = A x − τ r, then the projection's
                 Ax -= np.multiply(r, tau, out=step)
-                deferred.add(apply, Ax, np.subtract(projected, x_new, out=x_new),
-                             projected if relative else scale)
+                deferred.add(apply, Ax, np.subtract(projected, x_new, out=x_new), norm)
             x, Ax = projected, (Ax if update else apply(projected))
         else:                                   # x_new − x = −τ t exactly
             err = _step_change(tau, t, x_new, None if relative else scale, step)
@@ -715,10 +715,9 @@ class _Deferred:
 
     def add(self, apply, Ax, d, norm):
         """A x += A d now (with what waits), or d kept; ``norm`` is the convergence
-        measure's scale, or the projected iterate whose Σ|x| it is."""
+        measure's normaliser (the scale, or Σ|x| of the projected iterate)."""
         if self.limit > 0.0:
-            size = float(np.abs(d).sum()) / (norm if np.ndim(norm) == 0 else
-                                             max(float(np.abs(norm).sum()), 1e-300))
+            size = float(np.abs(d).sum()) / norm
             if self.lag + size <= self.limit:
                 self.lag += size
                 self.pending = d.copy() if self.pending is None else \

@@ -126,6 +126,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     inner = max(tol, FIRST_PASS_TOLERANCE)
     for passes in range(1, max_passes + 1):
         lag = p                                   # the bound of s: |s| <= p (lagged)
+        lo, hi = np.stack([zero, -lag]), np.stack([inf, lag])
         Ax_of = None
         if lag_old is not None:                   # slip cells stay on their moved bound
             moved = follow_bound(s, lag_old, lag)
@@ -136,10 +137,9 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                 Ax_of, s = np.stack([p, s]), moved
                 if pending is not None:
                     Ax_of -= pending
-        res = box_cg(apply, b, np.stack([zero, -lag]), np.stack([inf, lag]), rows,
-                     np.stack([p, s]), tol=inner, max_iter=max_iter, restore="shift",
-                     Ax0=Ax, precondition=precondition, Ax0_of=Ax_of, update=True,
-                     defer=DEFER)
+        res = box_cg(apply, b, lo, hi, rows, np.stack([p, s]), tol=inner,
+                     max_iter=max_iter, restore="shift", Ax0=Ax, precondition=precondition,
+                     Ax0_of=Ax_of, update=True, defer=DEFER)
         pending = res.pending
         its += res.iterations
         if not res.converged:
@@ -161,9 +161,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
             omega3 = float(res.multiplier[0])
             if pending is not None:               # the product made exact at the end
                 Ax = Ax + apply(pending)
-                x = np.stack([p, s])
-                omega3 = float(rows.fit(Ax + b, (x > np.stack([zero, -lag]))
-                                        & (x < np.stack([inf, lag])))[0])
+                omega3 = float(rows.fit(Ax + b, (res.x > lo) & (res.x < hi))[0])
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
             return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True, change)
     return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False, change)
