@@ -134,7 +134,8 @@ def bench_memory(backend, threads):
 def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
     Ts = 0.9 * MU * W
     print(f"paper figure 3: rigid sphere on Maxwell (glassy E = 105 GPa, ν = 0.3: the steel "
-          f"pair's composite modulus; coupling on), τ = t', {n}², {steps} steps, end to end")
+          f"pair's composite modulus; coupling on), τ = t', {n}², {steps} steps, end to end, "
+          f"{threads} FFT thread{'s' if threads > 1 else ''}")
     for form in forms:
         sc = _scene(indenter={"material": "rigid"},
                     halfspace={"material": "viscoelastic", "young": 105e9, "poisson": NU,
