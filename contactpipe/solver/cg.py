@@ -187,7 +187,7 @@ class BlockSums(Constraints):
         if self._buf is None or self._buf.shape != v.shape:
             self._buf = np.empty(v.shape)
         sums = np.multiply(v, cells, out=self._buf).reshape(self.m, -1).sum(axis=1)
-        counts = np.array([max(np.count_nonzero(c), 1) for c in cells])
+        counts = np.array([max(np.count_nonzero(c), 1) for c in cells.reshape(self.m, -1)])
         return (sums / counts).reshape(self.m, 1, 1)
 
     def fit(self, g, cells):
