@@ -189,7 +189,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--grids", type=int, nargs="+", default=None,
                         help="grid sizes (cells per side)")
     parser.add_argument("--fft", choices=("auto", "pyfftw", "scipy"), default="auto")
-    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--threads", type=int, default=1,
+                        help="FFT threads of each run (default 1, as solver.threads; 2 puts "
+                             "a single run on both cores of a 2-core machine)")
     parser.add_argument("--vector", action="store_true",
                         help="paper-fig3: also time the vector tangential form (slow)")
 
