@@ -27,6 +27,8 @@ except ImportError:  # pragma: no cover
     pyfftw = None
     HAVE_PYFFTW = False
 
+from . import wisdom
+
 __all__ = ["Convolver", "HAVE_PYFFTW"]
 
 _PLAN_LOCK = threading.Lock()
@@ -45,7 +47,8 @@ class Convolver:
         Threads given to the FFT library.
     planner : str
         pyFFTW planner effort ("FFTW_ESTIMATE", "FFTW_MEASURE", ...). Planning happens once,
-        here, and its time is recorded in :attr:`plan_time_s`.
+        here, and its time is recorded in :attr:`plan_time_s`. Measured plans start from,
+        and add to, the wisdom that earlier processes kept (:mod:`.wisdom`).
 
     Attributes
     ----------
@@ -105,6 +108,10 @@ class Convolver:
         self._rout = pyfftw.zeros_aligned((n1, m2), dtype="float64")
         kw = dict(threads=self.threads)
         self._slots = []
+        measured = planner != "FFTW_ESTIMATE"
+        if measured:
+            with _PLAN_LOCK:
+                wisdom.load(pyfftw)      # the plans measured by an earlier process
         self._forward_slot(0)
         with _PLAN_LOCK:
             self._inv_cols = pyfftw.FFTW(self._cin, self._cin, axes=(0,),
@@ -112,6 +119,8 @@ class Convolver:
             self._inv_rows = pyfftw.FFTW(self._cin[:n1], self._rout, axes=(1,),
                                          direction="FFTW_BACKWARD",
                                          flags=(planner, "FFTW_DESTROY_INPUT"), **kw)
+            if measured:
+                wisdom.save(pyfftw)
 
     def _forward_slot(self, n):
         """The n-th forward spectrum buffer and its two plans (made when first asked
