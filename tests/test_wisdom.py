@@ -82,7 +82,17 @@ def test_an_unwritable_wisdom_place_is_no_error(fresh, monkeypatch, tmp_path):
 
 
 def test_default_place_is_the_user_cache(monkeypatch, tmp_path):
+    import platform
     monkeypatch.delenv(wisdom.ENV, raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setattr(platform, "node", lambda: "node 7/a")
     p = wisdom.path()
-    assert p.parent == tmp_path / "contactpipe" and p.name.startswith("fftw-wisdom-")
+    assert p.parent == tmp_path / "contactpipe"
+    assert p.name.startswith("fftw-wisdom-node_7_a-")          # one file per host
+    # a relative XDG_CACHE_HOME is not valid (XDG): ~/.cache; no absolute home either:
+    # none kept (not a folder named "~" in the working folder)
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative/cache")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert wisdom.path().parent == tmp_path / "home" / ".cache" / "contactpipe"
+    monkeypatch.setenv("HOME", "not/absolute")
+    assert wisdom.path() is None

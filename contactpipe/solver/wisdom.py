@@ -13,7 +13,9 @@ The wisdom lives in one small text file (FFTW's own format, double precision onl
 * ``CONTACTPIPE_FFTW_WISDOM=/some/file``: that file;
 * ``CONTACTPIPE_FFTW_WISDOM=off`` (or ``0``, ``no``, ``none``, empty): none kept;
 * unset: ``$XDG_CACHE_HOME/contactpipe/`` (``~/.cache/contactpipe/``), one file per
-  processor architecture and pyFFTW version.
+  host, processor architecture and pyFFTW version (wisdom is only good on the machine
+  that measured it; the nodes of a cluster that share a home keep one file each); none
+  where there is no absolute home or cache folder.
 
 It is a cache and nothing more: a missing, unreadable or foreign file is ignored (FFTW
 refuses wisdom it cannot parse), and a file that cannot be written is not written. Writes
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import os
 import platform
+import re
 from pathlib import Path
 
 from ..files import atomic_path
@@ -43,9 +46,14 @@ def path() -> Path | None:
     if value is not None:
         return None if value.strip().lower() in _OFF else Path(value).expanduser()
     import pyfftw
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return (Path(base) / "contactpipe"
-            / f"fftw-wisdom-{platform.machine() or 'cpu'}-pyfftw-{pyfftw.__version__}.txt")
+    base = os.environ.get("XDG_CACHE_HOME", "")
+    if not os.path.isabs(base):       # unset or relative: the XDG default
+        base = os.path.join(os.path.expanduser("~"), ".cache")
+    if not os.path.isabs(base):       # no home to speak of: keep none rather than guess
+        return None
+    host = re.sub(r"[^A-Za-z0-9._-]", "_", platform.node() or "host")
+    return (Path(base) / "contactpipe" / f"fftw-wisdom-{host}-{platform.machine() or 'cpu'}"
+                                         f"-pyfftw-{pyfftw.__version__}.txt")
 
 
 def load(pyfftw) -> bool:
