@@ -4,7 +4,7 @@ Measuring the pruned DC-FFT plans (:class:`contactpipe.solver.convolution.Convol
 ``FFTW_MEASURE``) takes 0.17 / 0.28 / 0.44 / 0.67 s at 64² / 128² / 256² / 512² on the
 development machine, in every process: every run, and every worker of a sweep. FFTW can
 export what it learnt ("wisdom") and take it back; with it, the same plans are made in
-about 2 ms. The plans are then also the same from one process to the next, and so is
+2–4 ms (64², 128²). The plans are then also the same from one process to the next, and so is
 their rounding (without wisdom each process measures afresh and may choose other
 algorithms, which moves results by rounding and pair counts by a few pairs).
 
