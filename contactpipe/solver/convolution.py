@@ -22,12 +22,12 @@ import scipy.fft
 
 try:  # pragma: no cover - exercised when pyfftw is installed
     import pyfftw
+
+    from . import wisdom
     HAVE_PYFFTW = True
 except ImportError:  # pragma: no cover
-    pyfftw = None
+    pyfftw = wisdom = None
     HAVE_PYFFTW = False
-
-from . import wisdom
 
 __all__ = ["Convolver", "HAVE_PYFFTW"]
 
@@ -111,7 +111,7 @@ class Convolver:
         measured = planner != "FFTW_ESTIMATE"
         if measured:
             with _PLAN_LOCK:
-                wisdom.load(pyfftw)      # the plans measured by an earlier process
+                wisdom.load()      # the plans measured by an earlier process
         self._forward_slot(0)
         with _PLAN_LOCK:
             self._inv_cols = pyfftw.FFTW(self._cin, self._cin, axes=(0,),
@@ -120,7 +120,7 @@ class Convolver:
                                          direction="FFTW_BACKWARD",
                                          flags=(planner, "FFTW_DESTROY_INPUT"), **kw)
             if measured:
-                wisdom.save(pyfftw)
+                wisdom.save()
 
     def _forward_slot(self, n):
         """The n-th forward spectrum buffer and its two plans (made when first asked

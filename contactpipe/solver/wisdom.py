@@ -1,5 +1,8 @@
 """FFTW wisdom kept between processes, so that a grid's plans are measured once per machine.
 
+Only the pyFFTW path uses it (:mod:`.convolution` imports this module where pyFFTW is
+installed).
+
 Measuring the pruned DC-FFT plans (:class:`contactpipe.solver.convolution.Convolver`,
 ``FFTW_MEASURE``) takes 0.17 / 0.28 / 0.44 / 0.67 s at 64² / 128² / 256² / 512² on the
 development machine, in every process: every run, and every worker of a sweep. FFTW can
@@ -29,6 +32,8 @@ import platform
 import re
 from pathlib import Path
 
+import pyfftw
+
 from ..files import atomic_path
 
 __all__ = ["ENV", "load", "path", "save"]
@@ -45,7 +50,6 @@ def path() -> Path | None:
     value = os.environ.get(ENV)
     if value is not None:
         return None if value.strip().lower() in _OFF else Path(value).expanduser()
-    import pyfftw
     base = os.environ.get("XDG_CACHE_HOME", "")
     if not os.path.isabs(base):       # unset or relative: the XDG default
         base = os.path.join(os.path.expanduser("~"), ".cache")
@@ -56,7 +60,7 @@ def path() -> Path | None:
                                          f"-pyfftw-{pyfftw.__version__}.txt")
 
 
-def load(pyfftw) -> bool:
+def load() -> bool:
     """Give FFTW the wisdom of the file (once per process and file); True if it took it."""
     p = path()
     if p is None or p in _known:
@@ -70,7 +74,7 @@ def load(pyfftw) -> bool:
     return bool(pyfftw.import_wisdom((data, b"", b""))[0])
 
 
-def save(pyfftw) -> bool:
+def save() -> bool:
     """Write FFTW's double-precision wisdom to the file when it holds something new;
     True if written."""
     p = path()
