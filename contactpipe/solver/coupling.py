@@ -233,8 +233,10 @@ class _Instant:
                           sums=all(w in (1, 2) for w in which))
         return con, known, which
 
-    def tangential(self, p, q, tol, Aq0=None):
-        """UTC: the shear under the bound mu p; returns it with (u1, u2) from p (or None)."""
+    def tangential(self, p, q, tol, Aq0=None, final=True):
+        """UTC: the shear under the bound mu p; returns it with (u1, u2) from p (or None).
+        ``final`` False: a pass that is not the instant's last, whose A q the next pass
+        does not use (the vector form then skips its exact recomputation)."""
         op, U, u_prev = self.op, self.U, self.prev.u
         up = op.coupling_to_tangential(p) if self.coupled else None     # (u1, u2) from p
         bound = self.mu * p
@@ -250,9 +252,9 @@ class _Instant:
             if self.rows is not None:
                 con, known, _ = self.rows
                 return solve_vector(op, b - known, bound, None, self.cell, q, tol,
-                                    self.lim.max_iter, Aq0, rows=con), up
+                                    self.lim.max_iter, Aq0, rows=con, exact=final), up
             return solve_vector(op, b, bound, self.T, self.cell, q, tol, self.lim.max_iter,
-                                Aq0), up
+                                Aq0, exact=final), up
         b = U[0] - u_prev[0] + (up[0] if up is not None else 0.0)
         T1 = self.T[0]
         if self.rows is not None:
@@ -415,7 +417,7 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
             q = np.stack([p * (s.T[0] / W), p * (s.T[1] / W)])
     elif s.tang != "none":
         inner = max(tol, FIRST_PASS_TOLERANCE) if s.coupled else tol
-        t_res, up = s.tangential(p, q, inner)
+        t_res, up = s.tangential(p, q, inner, final=not s.coupled)
         s.its += t_res.iterations
         if not t_res.converged:
             return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
@@ -435,13 +437,14 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
             p = n.p
             last = inner == tol
             inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
-            t_res, up = s.tangential(p, q, inner, Aq0=t_res.Aq)
+            final = change < tol and last
+            t_res, up = s.tangential(p, q, inner, Aq0=t_res.Aq, final=final)
             s.its += t_res.iterations
             if not t_res.converged:
                 return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
             q = t_res.q
             domega, dphi3 = s.motions(t_res)
-            if change < tol and last:
+            if final:
                 break
         worst = max(worst, t_res.residual)
 

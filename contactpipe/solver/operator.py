@@ -222,6 +222,38 @@ class ContactOperator:
         sigma = self._derived["precondition33"]
         return lambda v, out=None: self.conv.periodic_filter(sigma, v, out=out)
 
+    def tangential_preconditioner(self):
+        """``M(v, d)``: v [m] (two in-plane fields) filtered by the symbol
+        σ/(λ + d σ) [Pa/m], an approximation of (K_t + d I)⁻¹ on the n1 x n2 grid taken
+        as periodic (a quarter of an FFT pair per field, as
+        :meth:`normal_preconditioner`).
+
+        σ is the symbol of (−Δ)^½ [1/m]; the tangential block behaves as λ/σ, with λ [1/Pa]
+        matched to the block's finest mode (the padded K11 spectrum at the grid's
+        Nyquist corner, where K11 = K22 and K12 vanishes), and d [m/Pa] ≥ 0 is a uniform
+        shift of the diagonal: the curvature of the slip cells' circles in the vector CG
+        (:func:`contactpipe.solver.tangential._vector_cg`), which there outweighs the
+        self-influence 2-10 times and makes the plain (−Δ)^½ filter useless.
+        """
+        if "precondition_t" not in self._derived:
+            conv = self.conv
+            d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
+            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.n1)[:, None]
+            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.n2)[None, :]
+            sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
+                            + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
+            sigma[0, 0] = sigma[sigma > 0].min()
+            corner = float(np.real(self.k["11"][conv.n1, conv.n2])) * conv.m1 * conv.m2
+            if not corner > 0.0:            # no finest-mode stiffness: the self-influence
+                corner = self.self_influence("11")
+            self._derived["precondition_t"] = (sigma, corner * float(sigma.max()))
+        sigma, lam = self._derived["precondition_t"]
+        scale = 1.0 / (self.conv.n1 * self.conv.n2)
+
+        def apply(v, d=0.0, out=None):
+            return self.conv.periodic_filter(sigma * (scale / (lam + d * sigma)), v, out=out)
+        return apply
+
     def coarse_normal(self):
         """The normal operator on the grid coarsened by two in each direction (cached), or
         None where a side is odd.
