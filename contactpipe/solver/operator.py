@@ -195,6 +195,22 @@ class ContactOperator:
             self._derived[key] = value
         return self._derived[key]
 
+    def _root_laplacian(self):
+        """The symbol of (−Δ)^½ on the n1 x n2 grid taken as periodic [1/m] (real-FFT
+        layout): sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the grid's angular
+        frequencies, the zero mode set to the smallest other value; cells of unknown sides
+        taken square (cached)."""
+        if "root_laplacian" not in self._derived:
+            conv = self.conv
+            d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
+            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.n1)[:, None]
+            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.n2)[None, :]
+            sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
+                            + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
+            sigma[0, 0] = sigma[sigma > 0].min()
+            self._derived["root_laplacian"] = sigma
+        return self._derived["root_laplacian"]
+
     def normal_preconditioner(self):
         """``M(v)``: v filtered by the symbol of (−Δ)^½, the discrete square root of the
         negative Laplacian, on the n1 x n2 grid itself taken as periodic (a quarter of an
@@ -211,14 +227,9 @@ class ContactOperator:
         (docs/design-choices.md). Cells of unknown sides are taken square.
         """
         if "precondition33" not in self._derived:     # the symbol, scaled by 1/(n1 n2)
-            conv = self.conv
-            d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
-            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.n1)[:, None]
-            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.n2)[None, :]
-            sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
-                            + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
-            sigma[0, 0] = sigma[sigma > 0].min()
-            self._derived["precondition33"] = sigma / (sigma.max() * conv.n1 * conv.n2)
+            sigma = self._root_laplacian()
+            self._derived["precondition33"] = sigma / (sigma.max()
+                                                       * self.conv.n1 * self.conv.n2)
         sigma = self._derived["precondition33"]
         return lambda v, out=None: self.conv.periodic_filter(sigma, v, out=out)
 
@@ -237,12 +248,7 @@ class ContactOperator:
         """
         if "precondition_t" not in self._derived:
             conv = self.conv
-            d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
-            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.n1)[:, None]
-            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.n2)[None, :]
-            sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
-                            + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
-            sigma[0, 0] = sigma[sigma > 0].min()
+            sigma = self._root_laplacian()
             corner = float(np.real(self.k["11"][conv.n1, conv.n2])) * conv.m1 * conv.m2
             if not corner > 0.0:            # no finest-mode stiffness: the self-influence
                 corner = self.self_influence("11")

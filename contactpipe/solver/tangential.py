@@ -281,8 +281,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
       are restored by projecting the stick cells (:func:`_restore_vector`).
 
     Each iteration costs one operator application (two FFT pairs; the filter half a pair
-    more), and a second one only
-    when a stick cell left its disk or the circle corrections add up (:func:`_vector_step`).
+    more), and a second one only when a stick cell left its disk or the circle corrections
+    add up (:func:`_vector_step`).
     A warm start's cells within :data:`SNAP` x tol of their bound start on it (else a
     bound raised by rounding turns slip cells into stick cells, which slide back in tens
     of iterations). It stops, not converged, when :data:`STALL` iterations pass without
