@@ -301,6 +301,53 @@ class ContactOperator:
         coarse._derived = {}
         return coarse
 
+    def window(self, c1, c2):
+        """The operator of a c1 x c2 block of this grid's cells: the same influence
+        coefficients (offsets up to c − 1 cells, read from this operator's kernels),
+        applied by DC-FFT on the block padded to 2 c1 x 2 c2, with its own
+        :class:`Convolver` (which counts its FFT pairs). Tractions confined to the block
+        give there the displacements this operator gives, to rounding.
+
+        The last window made is kept (a new size replaces it), and so are this grid's
+        kernels in real space (nine inverse transforms, set-up work not counted in FFT
+        pairs), until :meth:`drop_windows`."""
+        key = ("window", int(c1), int(c2))
+        if key not in self._derived:
+            self.drop_windows(kernels=False)
+            self._derived[key] = self._windowed(int(c1), int(c2))
+        return self._derived[key]
+
+    def drop_windows(self, kernels=True) -> None:
+        """Free the window :meth:`window` made and (``kernels``) the real-space kernels
+        it came from."""
+        names = ("window", "kernels") if kernels else ("window",)
+        for key in [k for k in self._derived if isinstance(k, tuple) and k[0] in names]:
+            del self._derived[key]
+
+    def _windowed(self, c1, c2):
+        conv = self.conv
+        if not (0 < c1 <= conv.n1 and 0 < c2 <= conv.n2):
+            raise ValueError(f"a window of {c1} x {c2} cells on a {conv.n1} x {conv.n2} grid")
+        sub = object.__new__(ContactOperator)
+        sub.conv = Convolver(c1, c2, backend=conv.backend, threads=conv.threads)
+        sub.w1, sub.w2, sub.rigid, sub.cell = self.w1, self.w2, self.rigid, self.cell
+        sub._derived, sub.k = {}, None
+        if self.rigid:
+            return sub
+        if ("kernels",) not in self._derived:
+            self._derived[("kernels",)] = {
+                key: scipy.fft.irfft2(spectrum * (conv.m1 * conv.m2), s=(conv.m1, conv.m2))
+                for key, spectrum in self.k.items()}
+        d1, d2 = np.arange(-(c1 - 1), c1), np.arange(-(c2 - 1), c2)
+        take = np.ix_(d1 % conv.m1, d2 % conv.m2)
+        put = np.ix_(d1 % (2 * c1), d2 % (2 * c2))
+        sub.k = {}
+        for key, full in self._derived[("kernels",)].items():
+            kernel = np.zeros((2 * c1, 2 * c2))
+            kernel[put] = full[take]
+            sub.k[key] = sub.conv.kernel_spectrum(kernel)
+        return sub
+
     def full(self, p, q1=None, q2=None):
         """(u1, u2, u3) [m] from all tractions (3 forward, 3 inverse transforms at most)."""
         k = self.k
