@@ -44,6 +44,7 @@ from .nomenclature import variables_for
 from .planning import check_resources, estimate_resources, plan as make_plan
 from .solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
 from .solver.warm_start import self_similar_start
+from .solver.window import solve_in_window
 from .solver.memory import BodyMemory, make_memory, resolve_body_rule
 from .solver.normal import NormalResult
 from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
@@ -501,20 +502,26 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
     same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
                    and _same_normal(pb.program, k) and st.normal is not None)
     iterations, passes, f_last = 0, 0, 0.0
-    for f in pb.fractions(first, _drive(pb.program, k)):
+    fractions = pb.fractions(first, _drive(pb.program, k))
+    for f in fractions:
         sub = pb.sub_plan(first)
         previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None, st.motion)
         if f_last > 0.0 and pb.similar is not None:     # a preload sub-step: its start
             previous = self_similar_start(previous, f / f_last, pb.similar)
         f_last = f
-        res = solve_instant(op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub,
-                            previous, pb.limits_of(f), controls=pb.controls(k, f))
+        controls = pb.controls(k, f)
+        windowed = fractions.size > 1 and pb.similar is not None and controls is None
+        res = (solve_in_window if windowed else solve_instant)(
+            op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,
+            pb.limits_of(f), controls=controls)
         iterations += res.iterations
         passes += res.passes
         if not res.converged:
             raise _failure(pb, k, T, res)
         _advance(pb, st, op, sub, U, res)
         _take_motions(pb, st, k, f, res)
+    if fractions.size > 1 and pb._trial is None:   # the preload's sub-steps ran on windows
+        op.drop_windows()                           # of their contact (solver.window): free them
     _check_edges(st.p, k, pb.t[k], pb.scene)
     for m in st.memories:
         if m is not None:

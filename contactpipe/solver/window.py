@@ -1,0 +1,174 @@
+"""A growing contact solved on the block of cells that holds it (the frictional preload).
+
+The sub-steps of a frictional preload (graded load fractions (k/n)², docs/time-integration.md
+§7) carry the contact from nothing to its full size: at the first of eight sub-steps its
+radius is a quarter of the final one. Every traction of such a sub-step lies in the
+contact, and the displacements the solve needs are those of the contact's cells, so the
+instant may be solved on a block (window) of cells around it, with the same influence
+coefficients (:meth:`ContactOperator.window`) padded to twice the block: the discrete
+problem is the same, only the cells that can carry no traction are left out. An FFT pair
+of a c1 x c2 window costs about c1 c2 / (N1 N2) of the grid's (a little less, N log N), and
+is counted so (:meth:`Convolver.charge`).
+
+That the left-out cells carry nothing is checked, not assumed. After the window's solve
+the displacement of the whole grid is formed from its tractions (about three FFT pairs of
+the grid: the next sub-step measures slip from it); the result stands when no contact
+cell lies on the window's outer ring and no cell outside the window would close
+(hi + u3 − ω3 < 0). Otherwise the window grows and the sub-step is solved again (from the
+window's pressure); a window that would cover most of the grid gives way to the grid.
+
+The window is taken from the sub-step's start: the self-similar stretch of the last
+sub-step's pressure (:mod:`.warm_start`), or, with nothing in contact yet, the pressure of
+the frictionless normal problem on the grid coarsened by two (solved to 1e-3), enlarged by
+:data:`MARGIN` of its extent on each side.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .coupling import InstantResult, Previous, solve_instant
+from .normal import COARSE_TOL, COARSEST, NormalResult, prolong, restrict, solve_normal
+
+__all__ = ["MARGIN", "SMALLEST_GRID", "LARGEST_SHARE", "solve_in_window"]
+
+#: Cells added on each side of the predicted contact, as a fraction of its extent [1]
+#: (at least two cells).
+MARGIN = 0.05
+#: Grids with fewer cells a side than this are solved whole [1].
+SMALLEST_GRID = 32
+#: A window holding more than this share of the grid's cells gives way to the grid [1].
+LARGEST_SHARE = 0.8
+#: Window sides are multiples of this many cells (few distinct FFT sizes) [1].
+SIDE_STEP = 8
+
+
+def solve_in_window(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
+                    limits, controls=None) -> InstantResult:
+    """One force-controlled instant (W and T given, rotations held at zero) of a growing
+    contact, solved on a window of cells around its predicted contact when that saves
+    work, else on the whole grid; the arguments are those of
+    :func:`.coupling.solve_instant` (``controls`` must be None).
+
+    Returns
+    -------
+    InstantResult
+        On the whole grid: p and q are zero outside the window, u is the displacement of
+        every cell, ``normal`` the normal solution with its K33 p of the whole grid.
+    """
+    if controls is not None:
+        raise ValueError("a windowed instant takes W and T alone (controls=None)")
+    n1, n2 = gap.shape
+    whole = (lambda: solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits))
+    if op.rigid or previous.normal is not None or min(n1, n2) < SMALLEST_GRID:
+        return whole()
+    support = _support(previous)
+    if support is None:
+        support = _coarse_contact(op, gap + U[2], W, cell_area, limits)
+        if support is None:
+            return whole()
+    start = previous
+    for attempt in range(3):
+        window = _window(support, (n1, n2), MARGIN * 2 ** attempt)
+        if window is None:
+            return whole()
+        res = _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, start, limits)
+        if res is None:
+            return whole()
+        grown = _outside(res, window, gap, U, limits.tol)
+        if grown is None:
+            return res
+        # the contact reached the window's edge or closes outside it: take those cells
+        # in, double the margin and solve again
+        support = support | grown
+        start = replace(previous, p_guess=res.p)
+    return whole()
+
+
+def _support(previous):
+    """The cells the start holds in contact or shear (a boolean grid), None if none."""
+    s = (previous.p_guess > 0.0) | np.any(previous.q != 0.0, axis=0)
+    return s if s.any() else None
+
+
+def _coarse_contact(op, gap0, W, cell_area, limits):
+    """The contact of the frictionless normal problem on the grid coarsened by two, on
+    the grid (its pairs charged at a quarter), or None where it cannot be had."""
+    n1, n2 = gap0.shape
+    coarse = op.coarse_normal() if not (n1 % 2 or n2 % 2) and min(n1, n2) >= 2 * COARSEST \
+        else None
+    if coarse is None or not W > 0.0:
+        return None
+    before = coarse.conv.pairs
+    res = solve_normal(coarse, restrict(gap0), W, 4.0 * cell_area,
+                       np.zeros((n1 // 2, n2 // 2)), max(limits.tol, COARSE_TOL),
+                       limits.max_iter)
+    op.conv.charge((coarse.conv.pairs - before) * 0.25)
+    if not res.converged or not np.all(np.isfinite(res.p)):
+        return None
+    s = prolong(res.p) > 0.0
+    return s if s.any() else None
+
+
+def _window(support, shape, margin):
+    """(rows, columns) slices of the window around ``support``, or None when it would
+    hold more than :data:`LARGEST_SHARE` of the grid."""
+    sides = []
+    for axis, n in enumerate(shape):
+        idx = np.flatnonzero(support.any(axis=1 - axis))
+        lo, hi = int(idx[0]), int(idx[-1]) + 1
+        pad = max(2, int(np.ceil(margin * (hi - lo))))
+        c = min(n, SIDE_STEP * int(np.ceil((hi - lo + 2 * pad) / SIDE_STEP)))
+        start = min(max(0, (lo + hi - c) // 2), n - c)
+        sides.append((start, c))
+    if sides[0][1] * sides[1][1] > LARGEST_SHARE * shape[0] * shape[1]:
+        return None
+    return tuple(slice(s, s + c) for s, c in sides)
+
+
+def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits):
+    """The instant solved on ``window``, put back on the grid; None if it failed there."""
+    r, c = window
+    sub = op.window(r.stop - r.start, c.stop - c.start)
+    before = sub.conv.pairs
+    prev = Previous(previous.q[:, r, c], previous.u[:, r, c], previous.p_guess[r, c],
+                    None, previous.motion)
+    m = mu if np.ndim(mu) == 0 else mu[r, c]
+    res = solve_instant(sub, gap[r, c], U[:, r, c], W, T, cell_area, m, plan, prev, limits)
+    share = sub.conv.n1 * sub.conv.n2 / (op.conv.n1 * op.conv.n2)
+    op.conv.charge((sub.conv.pairs - before) * share)
+    if not res.converged:
+        return None
+    p = np.zeros(gap.shape)
+    q = np.zeros((2,) + gap.shape)
+    p[r, c], q[:, r, c] = res.p, res.q
+    k = op.k           # (u1, u2, u3 from the shear, K33 p): 3 forward, 4 inverse transforms
+    rows = [[k["11"], k["12"], k["13"]], [k["21"], k["22"], k["23"]],
+            [k["31"], k["32"], None], [None, None, k["33"]]]
+    out = op.conv.convolve_matrix(rows, [q[0], q[1] if np.any(q[1]) else None, p])
+    Ap = out[3]
+    u = U + out[:3]
+    u[2] += Ap
+    normal = NormalResult(p, res.omega3, Ap, res.iterations, res.residual, True)
+    return InstantResult(p, q, u, res.omega3, res.domega, res.iterations, res.passes, True,
+                         res.residual, normal=normal, phi=np.asarray(res.phi, float).copy(),
+                         dphi3=res.dphi3)
+
+
+def _outside(res, window, gap, U, tol):
+    """None when the window held the contact; else the cells it must take in as well (the
+    contact's cells on the window's outer ring, the cells outside that would close)."""
+    r, c = window
+    n1, n2 = gap.shape
+    inner = np.zeros(gap.shape, bool)
+    inner[r.start + (r.start > 0):r.stop - (r.stop < n1),
+          c.start + (c.start > 0):c.stop - (c.stop < n2)] = True
+    inside = np.zeros(gap.shape, bool)
+    inside[r, c] = True
+    u3 = res.u[2]
+    scale = float(np.abs(u3[inside]).max()) if inside.any() else 0.0
+    closing = ~inside & (gap + u3 - res.omega3 < -tol * scale)
+    edge = inside & ~inner & (res.p > 0.0)
+    grow = closing | edge
+    return grow if grow.any() else None

@@ -1,0 +1,173 @@
+"""The frictional preload's sub-steps solved on the window of cells around their contact
+(contactpipe.solver.window; issue 12, item 2).
+
+Case: steel ball (R = 18 mm) on aluminium, W = 1 kN, mu = 0.1, a coupled pair (Dundurs
+beta != 0), so the preload produces shear and slip (Spence). Grid 64² over 3 a_Hertz of
+steel on steel (0.489 mm), tolerance 1e-10 here (1e-9 end to end). A window's answer is the
+whole grid's to within the tolerance: pressure to 1e-8 of p_max, shear to 1e-7 of mu p_max.
+"""
+import numpy as np
+import pytest
+
+import contactpipe as cp
+from contactpipe import simulation
+from contactpipe.planning import plan as make_plan
+from contactpipe.simulation import State, _Problem
+from contactpipe.solver import window
+from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
+from contactpipe.solver.warm_start import self_similar_start
+
+R, W, MU, A = 0.018, 1000.0, 0.1, 0.489e-3
+ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
+
+
+def scene(n=64, steps=4, tol=1e-9):
+    T = 0.9 * MU * W
+    return cp.Scene(name="window", geometry={"shape": "sphere", "radius": R},
+                    indenter={"material": "elastic", "young": 210e9, "poisson": 0.3},
+                    halfspace=dict(ALUMINIUM), friction={"mu": MU},
+                    load={"time": [0.0, 0.25, 0.75, 1.0], "normal_force": W,
+                          "tangential_force": [0.0, T, -T, T]},
+                    grid={"points": [n, n], "size": [3 * A, 3 * A]},
+                    time={"steps": steps}, solver={"tolerance": tol})
+
+
+@pytest.fixture(scope="module")
+def problem():
+    sc = scene()
+    return {form: _Problem(sc, make_plan(sc, tangential=form)) for form in ("scalar", "vector")}
+
+
+def test_window_operator_is_the_grid_operator_on_a_block(problem):
+    op = problem["scalar"].op_first
+    n = op.conv.n1
+    rng = np.random.default_rng(1)
+    rows, cols = slice(20, 44), slice(9, 49)
+    t = np.zeros((3, n, n))
+    t[:, rows, cols] = rng.random((3, 24, 40))
+    u = op.full(t[2], t[0], t[1])
+    sub = op.window(24, 40)
+    u_block = sub.full(t[2, rows, cols], t[0, rows, cols], t[1, rows, cols])
+    assert np.abs(u_block - u[:, rows, cols]).max() <= 1e-13 * np.abs(u).max()
+    assert op.window(24, 40) is sub                      # kept while it is the last
+    assert op.window(16, 16) is not sub and op.window(24, 40) is not sub
+    op.drop_windows()
+    assert not any(isinstance(k, tuple) and k[0] in ("window", "kernels")
+                   for k in op._derived)
+
+
+def _sub_steps(pb, solve, count=4, margin=None):
+    """The first ``count`` sub-steps of an 8-sub-step preload, each solved by ``solve``
+    from the same start; their results."""
+    op, n = pb.op_first, pb.shape[0]
+    lim = Tolerances(1e-10, pb.limits.max_iter, pb.limits.max_passes)
+    st = State.initial(pb.shape, [None, None])
+    out, f_last = [], 0.0
+    for k in range(1, count + 1):
+        f = (k / 8) ** 2
+        prev = Previous(st.q, st.u, st.p, None, st.motion)
+        if f_last:
+            prev = self_similar_start(prev, f / f_last, 1 / 3)
+        res = solve(op, pb.gap, np.zeros((3, n, n)), f * W, np.zeros(2), pb.cell, pb.mu,
+                    pb.plan, prev, lim)
+        assert res.converged
+        out.append(res)
+        st.p, st.q, st.u, f_last = res.p, res.q, res.u, f
+    return out
+
+
+@pytest.mark.parametrize("form", ["scalar", "vector"])
+def test_sub_steps_in_windows_match_the_whole_grid(problem, form):
+    pb = problem[form]
+    whole = _sub_steps(pb, solve_instant)
+    charged0 = pb.conv.charged
+    windowed = _sub_steps(pb, window.solve_in_window)
+    assert pb.conv.charged > charged0                   # the windows' pairs are counted
+    for a, b in zip(whole, windowed):
+        p0 = a.p.max()
+        assert np.abs(a.p - b.p).max() <= 1e-8 * p0
+        assert np.abs(a.q - b.q).max() <= 1e-7 * MU * p0
+        assert np.abs(a.u - b.u).max() <= 1e-8 * np.abs(a.u).max()
+        assert b.omega3 == pytest.approx(a.omega3, rel=1e-9)
+        Ap = pb.op_first.normal(b.p)                     # K33 p of the whole grid
+        assert np.abs(b.normal.Ap - Ap).max() <= 1e-12 * np.abs(Ap).max()
+        assert np.all(b.p[b.p > 0] > 0) and (b.p > 0).sum() == (a.p > 0).sum()
+
+
+def test_a_window_too_small_grows(problem, monkeypatch):
+    """A start that under-predicts the contact (the last sub-step's pressure, not
+    stretched, four times the load later) gives a window the contact outgrows: the check
+    finds it and the sub-step is solved again on a larger window."""
+    pb = problem["scalar"]
+    op, n = pb.op_first, pb.shape[0]
+    lim = Tolerances(1e-10, pb.limits.max_iter, pb.limits.max_passes)
+    zero = np.zeros((3, n, n))
+    first = solve_instant(op, pb.gap, zero, W / 16, np.zeros(2), pb.cell, pb.mu, pb.plan,
+                          Previous(np.zeros((2, n, n)), zero, np.zeros((n, n))), lim)
+    prev = Previous(first.q, first.u, first.p, None, None)
+    grown = []
+    outside = window._outside
+
+    def spy(*args):
+        cells = outside(*args)
+        grown.append(cells is not None)
+        return cells
+    monkeypatch.setattr(window, "_outside", spy)
+    b = window.solve_in_window(op, pb.gap, zero, W / 4, np.zeros(2), pb.cell, pb.mu,
+                               pb.plan, prev, lim)
+    a = solve_instant(op, pb.gap, zero, W / 4, np.zeros(2), pb.cell, pb.mu, pb.plan, prev,
+                      lim)
+    assert grown[0] and not grown[-1]
+    assert np.abs(a.p - b.p).max() <= 1e-8 * a.p.max()
+    assert np.abs(a.q - b.q).max() <= 1e-7 * MU * a.p.max()
+
+
+def test_outside_finds_contact_on_the_ring_and_closing_cells():
+    class Res:
+        pass
+    n = 16
+    gap = np.full((n, n), 1e-6)
+    res = Res()
+    res.p, res.u, res.omega3 = np.zeros((n, n)), np.zeros((3, n, n)), 0.0
+    win = (slice(4, 12), slice(4, 12))
+    assert window._outside(res, win, gap, np.zeros((3, n, n)), 1e-9) is None
+    res.p[4, 7] = 1.0                                   # contact on the outer ring
+    assert window._outside(res, win, gap, np.zeros((3, n, n)), 1e-9)[4, 7]
+    res.p[4, 7] = 0.0
+    gap[1, 1] = -1e-6                                   # a cell outside would close
+    res.u[2, 5, 5] = 1e-6                               # (the displacement scale)
+    cells = window._outside(res, win, gap, np.zeros((3, n, n)), 1e-9)
+    assert cells[1, 1] and cells.sum() == 1
+
+
+def test_whole_grid_where_a_window_saves_nothing(problem):
+    """A window over more than LARGEST_SHARE of the grid, a grid under SMALLEST_GRID or
+    general controls: the whole grid, as solve_instant."""
+    support = np.zeros((64, 64), bool)
+    support[2:62, 2:62] = True
+    assert window._window(support, (64, 64), window.MARGIN) is None
+    support[:] = False
+    support[28:36, 30:34] = True
+    rows, cols = window._window(support, (64, 64), window.MARGIN)
+    assert rows.stop - rows.start == 16 and cols.stop - cols.start == 8
+    assert rows.start <= 26 and rows.stop >= 38 and cols.start <= 28 and cols.stop >= 36
+    pb = problem["scalar"]
+    with pytest.raises(ValueError, match="controls=None"):
+        window.solve_in_window(pb.op_first, pb.gap, None, W, (0, 0), pb.cell, MU, pb.plan,
+                               None, pb.limits, controls=object())
+
+
+def test_a_run_with_windows_matches_one_without(monkeypatch):
+    """End to end (64², 4 steps, tolerance 1e-9): the archive's fields with the preload
+    in windows are those of the whole-grid preload to within the tolerance, in fewer FFT
+    pairs at the first instant."""
+    sc = scene(steps=4)
+    ds = cp.simulate(sc)
+    monkeypatch.setattr(simulation, "solve_in_window", solve_instant)
+    ref = cp.simulate(sc)
+    p0 = float(ref.p.max())
+    assert np.abs(ds.p.values - ref.p.values).max() <= 1e-8 * p0
+    assert np.abs(ds.q1.values - ref.q1.values).max() <= 1e-7 * MU * p0
+    assert ds.attrs["preload_error_estimate"] == pytest.approx(
+        ref.attrs["preload_error_estimate"], rel=1e-5)
+    assert float(ds.fft_pairs[0]) < 0.7 * float(ref.fft_pairs[0])
