@@ -207,6 +207,10 @@ FFT_FLOOR_S = 3.4e-10
 #: 64² / 128² (14-15 N^(1/4); 8 leaves room for its preload, which costs fewer sub-steps'
 #: worth than it is counted with).
 PAIRS_PER_ROOT = {"none": 1.2, "scalar": 1.2, "vector": 8.0}
+#: A preload sub-step on a window of its contact against an instant on the whole grid,
+#: at least (its window's share of the grid: 16.8 / 66 pairs per sub-step on paper fig. 3,
+#: 128², 36 / 67 steel on aluminium).
+WINDOWED_SUBSTEP = 0.2
 #: A coupled instant (β ≠ 0) against an uncoupled one, by tangential form: the joint solve
 #: 58 / 70 / 79 against 20 / 23 / 28 pairs (2.8-3.0), the vector form's Gauss-Seidel
 #: passes 223 / 312 against 112 / 166 (1.9-2.0).
@@ -306,14 +310,19 @@ def _preload_substeps(setting) -> int:
     return n + (n // 4 + n // 2 if n >= 4 else 0)
 
 
-def _window_bytes(scene, pl, n1, n2, R, S) -> int:
-    """Bytes a frictional preload on a sphere or an ellipsoid holds while its sub-steps run
-    on windows (:mod:`contactpipe.solver.window`): the grid's nine kernels in real space,
-    and one window's kernel spectra and FFT buffers (at most :data:`LARGEST_SHARE` of the
-    grid's)."""
-    if not (pl.tangential != "none" and pl.coupling != "none" and pl.preload == "frictional"
+def _windows_apply(scene, pl, n1, n2) -> bool:
+    """A frictional preload whose sub-steps run on windows of their contact
+    (:mod:`contactpipe.solver.window`): a coupled pair, a sphere or an ellipsoid."""
+    return (pl.tangential != "none" and pl.coupling != "none" and pl.preload == "frictional"
             and scene.geometry.shape in ("sphere", "ellipsoid")
-            and min(n1, n2) >= SMALLEST_GRID):
+            and min(n1, n2) >= SMALLEST_GRID)
+
+
+def _window_bytes(scene, pl, n1, n2, R, S) -> int:
+    """Bytes a preload on windows holds while its sub-steps run: the grid's nine kernels
+    in real space, and one window's kernel spectra and FFT buffers (at most
+    :data:`LARGEST_SHARE` of the grid's)."""
+    if not _windows_apply(scene, pl, n1, n2):
         return 0
     return int(9 * R + LARGEST_SHARE * (9 * S + 2 * R + 7 * S))
 
@@ -406,6 +415,8 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     # alone makes no shear, unless T is already there, which this estimate leaves out)
     substeps = _preload_substeps(scene.solver.preload_substeps) \
         if tangential and pl.coupling != "none" else 1
+    if substeps > 1 and _windows_apply(scene, pl, n1, n2):
+        substeps *= WINDOWED_SUBSTEP
     pairs = per_instant * (instants - 1 + substeps)
     m = 4 * n
     # the padded kernels of the set-up are freed before the operators are formed
