@@ -46,7 +46,7 @@ except ImportError:  # pragma: no cover - Windows: no RLIMIT_AS to respect
 from .exceptions import SceneError
 from .materials import ExponentialCreep
 from .nomenclature import FIELD, VARIABLES, variables_for
-from .solver.window import LARGEST_SHARE, SMALLEST_GRID
+from .solver.window import LARGEST_SHARE, MARGIN, SMALLEST_GRID
 
 __all__ = ["Plan", "plan", "pair_couples", "RULES", "Resources", "estimate_resources",
            "available_memory", "check_resources"]
@@ -318,13 +318,33 @@ def _windows_apply(scene, pl, n1, n2) -> bool:
             and min(n1, n2) >= SMALLEST_GRID)
 
 
-def _window_bytes(scene, pl, n1, n2, R, S) -> int:
-    """Bytes a preload on windows holds while its sub-steps run: the grid's nine kernels
-    in real space, and one window's kernel spectra and FFT buffers (at most
-    :data:`LARGEST_SHARE` of the grid's)."""
-    if not _windows_apply(scene, pl, n1, n2):
+def _window_bytes(n1, n2, R, S) -> int:
+    """Bytes the windows of the contact (:mod:`contactpipe.solver.window`) hold while
+    they serve: the grid's nine kernels in real space, and one window's kernel spectra
+    and FFT buffers (at most :data:`LARGEST_SHARE` of the grid's)."""
+    if min(n1, n2) < SMALLEST_GRID:
         return 0
     return int(9 * R + LARGEST_SHARE * (9 * S + 2 * R + 7 * S))
+
+
+def _step_share(scene, pl, n1, n2) -> float:
+    """A floor of a step's FFT pairs on a window of its contact against the whole grid:
+    the share of the grid's cells in the window around the Hertz contact under the
+    instantaneous (glassy) moduli, the smallest of a creeping contact (its extent and
+    :data:`MARGIN` on each side); 1 where no window serves: a grid under
+    :data:`SMALLEST_GRID`, a contact without an estimate or whose window would exceed
+    :data:`LARGEST_SHARE`, or an elastic pair without coupling, whose steps reuse the
+    normal solution on the whole grid."""
+    if min(n1, n2) < SMALLEST_GRID or (pl.coupling == "none" and pl.memory == "none"):
+        return 1.0
+    axes, size = scene.hertz_semi_axes("instantaneous"), scene.resolved_grid_size()
+    if axes is None or size is None:
+        return 1.0
+    share = 1.0
+    for a, side, n in zip(axes, size, (n1, n2)):
+        cells = 2.0 * float(a) / float(side) * n
+        share *= min(n, cells + 2 * max(2.0, MARGIN * cells)) / n
+    return share if np.isfinite(share) and 0.0 < share <= LARGEST_SHARE else 1.0
 
 
 def _output_bytes(scene, tangential, instants, n, in_memory) -> int:
@@ -377,12 +397,12 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     ======================================================  =========  =========
 
     and 415 / 495 MiB for the frictionless Maxwell run at 512² (4 steps); before each
-    run ru_maxrss equalled the resident memory (no earlier peak). Since then a frictional
-    preload on a sphere or an ellipsoid runs its sub-steps on windows of the contact, and
-    the estimate counts what they hold ("preload windows": the nine kernels in real space
-    and one window's spectra and buffers at most: +12 MiB at 128², +47 MiB at 256²),
-    which the estimates above leave out; the measured peak did not rise (128², rigid
-    on Maxwell, fretting, 5 steps: 47.7 MiB before, 47.2-48.4 MiB after). The estimate
+    run ru_maxrss equalled the resident memory (no earlier peak). Since then the instants
+    run on windows of their contact, and the estimate counts what the windows hold
+    ("contact windows": the nine kernels in real space and one window's spectra and
+    buffers at most: +12 MiB at 128², +47 MiB at 256²), which the estimates above leave
+    out (128², rigid on Maxwell, fretting, 5 steps: measured 47.7 MiB before the windows,
+    54.5 MiB with them, estimated 53.3 then 65.1 MiB). The estimate
     stays above every measurement, by 6 % to 80 % (the most on small grids, where the fixed
     allowances dominate); it grows as N1 x N2 (for a viscoelastic half-space 1.7 kB per cell
     measured at 512², 1.9 kB estimated: four sets of nine kernel spectra). The time is a floor, not a forecast:
@@ -406,7 +426,7 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
         "memory fields": _memory_fields(bodies, pl.memory, instants, n),
         "per-step arrays": WORKING[pl.tangential] * n * 8,
         "output": _output_bytes(scene, tangential, instants, n, in_memory),
-        "preload windows": _window_bytes(scene, pl, n1, n2, R, S),
+        "contact windows": _window_bytes(n1, n2, R, S),
         "base": BASE_BYTES,
     }
     per_instant = PAIRS_PER_ROOT[pl.tangential] * n ** 0.25 * \
@@ -417,7 +437,7 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
         if tangential and pl.coupling != "none" else 1
     if substeps > 1 and _windows_apply(scene, pl, n1, n2):
         substeps *= WINDOWED_SUBSTEP
-    pairs = per_instant * (instants - 1 + substeps)
+    pairs = per_instant * ((instants - 1) * _step_share(scene, pl, n1, n2) + substeps)
     m = 4 * n
     # the padded kernels of the set-up are freed before the operators are formed
     peak = parts["kernel spectra"] + parts["base"] + max(

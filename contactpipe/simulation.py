@@ -510,7 +510,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
             previous = self_similar_start(previous, f / f_last, pb.similar)
         f_last = f
         controls = pb.controls(k, f)
-        windowed = fractions.size > 1 and pb.similar is not None and controls is None
+        windowed = controls is None and (not first or fractions.size > 1 and pb.similar is not None)
         res = (solve_in_window if windowed else solve_instant)(
             op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,
             pb.limits_of(f), controls=controls)
@@ -520,8 +520,8 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
             raise _failure(pb, k, T, res)
         _advance(pb, st, op, sub, U, res)
         _take_motions(pb, st, k, f, res)
-    if fractions.size > 1 and pb._trial is None:   # the preload's sub-steps ran on windows
-        op.drop_windows()                           # of their contact (solver.window): free them
+    if fractions.size > 1 and pb._trial is None:   # the preload's windows of the contact
+        op.drop_windows()                           # (solver.window): the march makes its own
     _check_edges(st.p, k, pb.t[k], pb.scene)
     for m in st.memories:
         if m is not None:

@@ -1,26 +1,31 @@
-"""A growing contact solved on the block of cells that holds it (the frictional preload).
+"""An instant solved on the block of cells that holds its contact.
 
-The sub-steps of a frictional preload (graded load fractions (k/n)², docs/time-integration.md
-§7) carry the contact from nothing to its full size: at the first of eight sub-steps its
-radius is a quarter of the final one. Every traction of such a sub-step lies in the
-contact, and the displacements the solve needs are those of the contact's cells, so the
-instant may be solved on a block (window) of cells around it, with the same influence
-coefficients (:meth:`ContactOperator.window`) padded to twice the block: the discrete
-problem is the same, only the cells that can carry no traction are left out. An FFT pair
-of a c1 x c2 window costs about c1 c2 / (N1 N2) of the grid's (a little less, N log N), and
-is counted so (:meth:`Convolver.charge`).
+Every traction of an instant lies in its contact, and the displacements its solve needs
+are those of the contact's cells, so the instant may be solved on a block (window) of
+cells around the contact, with the same influence coefficients
+(:meth:`ContactOperator.window`) padded to twice the block: the discrete problem is the
+same, only the cells that can carry no traction are left out. An FFT pair of a c1 x c2
+window costs about c1 c2 / (N1 N2) of the grid's (a little less, N log N), and is counted
+so (:meth:`Convolver.charge`). Two kinds of instant gain:
+
+- the sub-steps of a frictional preload (graded load fractions (k/n)²,
+  docs/time-integration.md §7), which carry the contact from nothing to its full size: at
+  the first of eight its radius is a quarter of the final one;
+- every step of the march on a grid larger than its contact: ``grid.size = "auto"`` spans
+  three contact radii, so the contact covers about half the grid's cells.
 
 That the left-out cells carry nothing is checked, not assumed. After the window's solve
-the displacement of the whole grid is formed from its tractions (about three FFT pairs of
-the grid: the next sub-step measures slip from it); the result stands when no contact
-cell lies on the window's outer ring and no cell outside the window would close
-(hi + u3 − ω3 < 0). Otherwise the window grows and the sub-step is solved again (from the
-window's pressure); a window that would cover most of the grid gives way to the grid.
+the displacement of the whole grid is formed from its tractions (the archive's u and the
+next instant's slip need it; 1 to 3.5 FFT pairs of the grid); the result stands when no
+contact cell lies on the window's outer ring and no cell outside the window would close
+(hi + u3 − ω3 below −tol × max u3). Otherwise the window takes those cells in, its margin
+doubles and the instant is solved again (from the window's pressure); a window that would
+cover more than :data:`LARGEST_SHARE` of the grid gives way to the grid.
 
-The window is taken from the sub-step's start: the self-similar stretch of the last
-sub-step's pressure (:mod:`.warm_start`), or, with nothing in contact yet, the pressure of
-the frictionless normal problem on the grid coarsened by two (solved to 1e-3), enlarged by
-:data:`MARGIN` of its extent on each side.
+The window is taken from the instant's start: the pressure and shear of the last instant
+(for a preload sub-step, stretched self-similarly, :mod:`.warm_start`), or, with nothing in
+contact yet, the pressure of the frictionless normal problem on the grid coarsened by two
+(solved to 1e-3), enlarged by :data:`MARGIN` of its extent on each side.
 """
 from __future__ import annotations
 
@@ -46,10 +51,11 @@ SIDE_STEP = 8
 
 def solve_in_window(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                     limits, controls=None) -> InstantResult:
-    """One force-controlled instant (W and T given, rotations held at zero) of a growing
-    contact, solved on a window of cells around its predicted contact when that saves
-    work, else on the whole grid; the arguments are those of
-    :func:`.coupling.solve_instant` (``controls`` must be None).
+    """One force-controlled instant (W and T given, rotations held at zero), solved on a
+    window of cells around its predicted contact when that saves work, else on the whole
+    grid; the arguments are those of :func:`.coupling.solve_instant` (``controls`` must
+    be None). The whole grid also serves where ``previous.normal`` is given (the normal
+    solution reused as it is) and on grids under :data:`SMALLEST_GRID` cells a side.
 
     Returns
     -------
@@ -143,17 +149,30 @@ def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits):
     p = np.zeros(gap.shape)
     q = np.zeros((2,) + gap.shape)
     p[r, c], q[:, r, c] = res.p, res.q
-    k = op.k           # (u1, u2, u3 from the shear, K33 p): 3 forward, 4 inverse transforms
-    rows = [[k["11"], k["12"], k["13"]], [k["21"], k["22"], k["23"]],
-            [k["31"], k["32"], None], [None, None, k["33"]]]
-    out = op.conv.convolve_matrix(rows, [q[0], q[1] if np.any(q[1]) else None, p])
-    Ap = out[3]
-    u = U + out[:3]
-    u[2] += Ap
+    u, Ap = _displacement(op, plan, U, p, q)
     normal = NormalResult(p, res.omega3, Ap, res.iterations, res.residual, True)
     return InstantResult(p, q, u, res.omega3, res.domega, res.iterations, res.passes, True,
                          res.residual, normal=normal, phi=np.asarray(res.phi, float).copy(),
                          dphi3=res.dphi3)
+
+
+def _displacement(op, plan, U, p, q):
+    """(u, K33 p) of the whole grid, with the terms :func:`.coupling.solve_instant` puts in
+    u: K33 p alone without shear (1 FFT pair); else the in-plane ones from the shear, and
+    the coupling ones of a coupled pair (at most 3 forward, 4 inverse transforms)."""
+    k = op.k
+    if plan.tangential == "none":
+        Ap = op.normal(p)
+        u = U.copy()
+        u[2] += Ap
+        return u, Ap
+    c = (lambda key: k[key]) if plan.coupling != "none" else (lambda key: None)
+    rows = [[k["11"], k["12"], c("13")], [k["21"], k["22"], c("23")],
+            [c("31"), c("32"), None], [None, None, k["33"]]]
+    out = op.conv.convolve_matrix(rows, [q[0], q[1] if np.any(q[1]) else None, p])
+    u = U + out[:3]
+    u[2] += out[3]
+    return u, out[3]
 
 
 def _outside(res, window, gap, U, tol):
