@@ -54,8 +54,9 @@ def solve_in_window(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     """One force-controlled instant (W and T given, rotations held at zero), solved on a
     window of cells around its predicted contact when that saves work, else on the whole
     grid; the arguments are those of :func:`.coupling.solve_instant` (``controls`` must
-    be None). The whole grid also serves where ``previous.normal`` is given (the normal
-    solution reused as it is) and on grids under :data:`SMALLEST_GRID` cells a side.
+    be None). A normal solution given in ``previous.normal`` is reused as it is, cut to
+    the window (its K33 p of the whole grid then spares that product). Grids under
+    :data:`SMALLEST_GRID` cells a side are solved whole.
 
     Returns
     -------
@@ -67,7 +68,7 @@ def solve_in_window(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         raise ValueError("a windowed instant takes W and T alone (controls=None)")
     n1, n2 = gap.shape
     whole = (lambda: solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits))
-    if op.rigid or previous.normal is not None or min(n1, n2) < SMALLEST_GRID:
+    if op.rigid or min(n1, n2) < SMALLEST_GRID:
         return whole()
     support = _support(previous)
     if support is None:
@@ -138,8 +139,10 @@ def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits):
     r, c = window
     sub = op.window(r.stop - r.start, c.stop - c.start)
     before = sub.conv.pairs
+    reused = previous.normal
+    cut = None if reused is None else replace(reused, p=reused.p[r, c], Ap=reused.Ap[r, c])
     prev = Previous(previous.q[:, r, c], previous.u[:, r, c], previous.p_guess[r, c],
-                    None, previous.motion)
+                    cut, previous.motion)
     m = mu if np.ndim(mu) == 0 else mu[r, c]
     res = solve_instant(sub, gap[r, c], U[:, r, c], W, T, cell_area, m, plan, prev, limits)
     share = sub.conv.n1 * sub.conv.n2 / (op.conv.n1 * op.conv.n2)
@@ -149,30 +152,36 @@ def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits):
     p = np.zeros(gap.shape)
     q = np.zeros((2,) + gap.shape)
     p[r, c], q[:, r, c] = res.p, res.q
-    u, Ap = _displacement(op, plan, U, p, q)
-    normal = NormalResult(p, res.omega3, Ap, res.iterations, res.residual, True)
+    u, Ap = _displacement(op, plan, U, p, q, None if reused is None else reused.Ap)
+    normal = reused if reused is not None else \
+        NormalResult(p, res.omega3, Ap, res.iterations, res.residual, True)
     return InstantResult(p, q, u, res.omega3, res.domega, res.iterations, res.passes, True,
                          res.residual, normal=normal, phi=np.asarray(res.phi, float).copy(),
                          dphi3=res.dphi3)
 
 
-def _displacement(op, plan, U, p, q):
+def _displacement(op, plan, U, p, q, Ap=None):
     """(u, K33 p) of the whole grid, with the terms :func:`.coupling.solve_instant` puts in
     u: K33 p alone without shear (1 FFT pair); else the in-plane ones from the shear, and
-    the coupling ones of a coupled pair (at most 3 forward, 4 inverse transforms)."""
+    the coupling ones of a coupled pair (at most 3 forward, 4 inverse transforms). A
+    given K33 p (``Ap``, a reused normal solution's) is not formed again."""
     k = op.k
     if plan.tangential == "none":
-        Ap = op.normal(p)
+        Ap = op.normal(p) if Ap is None else Ap
         u = U.copy()
         u[2] += Ap
         return u, Ap
     c = (lambda key: k[key]) if plan.coupling != "none" else (lambda key: None)
-    rows = [[k["11"], k["12"], c("13")], [k["21"], k["22"], c("23")],
-            [c("31"), c("32"), None], [None, None, k["33"]]]
-    out = op.conv.convolve_matrix(rows, [q[0], q[1] if np.any(q[1]) else None, p])
+    rows = [[k["11"], k["12"], c("13")], [k["21"], k["22"], c("23")], [c("31"), c("32"), None]]
+    if Ap is None:
+        rows.append([None, None, k["33"]])
+    uses_p = Ap is None or plan.coupling != "none"
+    out = op.conv.convolve_matrix(rows, [q[0], q[1] if np.any(q[1]) else None,
+                                         p if uses_p else None])
+    Ap = out[3] if Ap is None else Ap
     u = U + out[:3]
-    u[2] += out[3]
-    return u, out[3]
+    u[2] += Ap
+    return u, Ap
 
 
 def _outside(res, window, gap, U, tol):
