@@ -46,7 +46,7 @@ except ImportError:  # pragma: no cover - Windows: no RLIMIT_AS to respect
 from .exceptions import SceneError
 from .materials import ExponentialCreep
 from .nomenclature import FIELD, VARIABLES, variables_for
-from .solver.window import LARGEST_SHARE, MARGIN, SMALLEST_GRID
+from .solver.window import LARGEST_SHARE, MARGIN, SIDE_STEP, SMALLEST_GRID
 
 __all__ = ["Plan", "plan", "pair_couples", "RULES", "Resources", "estimate_resources",
            "available_memory", "check_resources"]
@@ -327,15 +327,15 @@ def _window_bytes(n1, n2, R, S) -> int:
     return int(9 * R + LARGEST_SHARE * (9 * S + 2 * R + 7 * S))
 
 
-def _step_share(scene, pl, n1, n2) -> float:
+def _step_share(scene, n1, n2) -> float:
     """A floor of a step's FFT pairs on a window of its contact against the whole grid:
     the share of the grid's cells in the window around the Hertz contact under the
-    instantaneous (glassy) moduli, the smallest of a creeping contact (its extent and
-    :data:`MARGIN` on each side); 1 where no window serves: a grid under
+    instantaneous (glassy) moduli, the smallest of a creeping contact (its extent,
+    :data:`MARGIN` on each side, sides rounded up to :data:`SIDE_STEP`); 1 where no window
+    serves: a grid under
     :data:`SMALLEST_GRID`, a contact without an estimate or whose window would exceed
-    :data:`LARGEST_SHARE`, or an elastic pair without coupling, whose steps reuse the
-    normal solution on the whole grid."""
-    if min(n1, n2) < SMALLEST_GRID or (pl.coupling == "none" and pl.memory == "none"):
+    :data:`LARGEST_SHARE`."""
+    if min(n1, n2) < SMALLEST_GRID:
         return 1.0
     axes, size = scene.hertz_semi_axes("instantaneous"), scene.resolved_grid_size()
     if axes is None or size is None:
@@ -343,7 +343,8 @@ def _step_share(scene, pl, n1, n2) -> float:
     share = 1.0
     for a, side, n in zip(axes, size, (n1, n2)):
         cells = 2.0 * float(a) / float(side) * n
-        share *= min(n, cells + 2 * max(2.0, MARGIN * cells)) / n
+        side = SIDE_STEP * math.ceil((cells + 2 * max(2.0, MARGIN * cells)) / SIDE_STEP)
+        share *= min(n, side) / n
     return share if np.isfinite(share) and 0.0 < share <= LARGEST_SHARE else 1.0
 
 
@@ -437,7 +438,7 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
         if tangential and pl.coupling != "none" else 1
     if substeps > 1 and _windows_apply(scene, pl, n1, n2):
         substeps *= WINDOWED_SUBSTEP
-    pairs = per_instant * ((instants - 1) * _step_share(scene, pl, n1, n2) + substeps)
+    pairs = per_instant * ((instants - 1) * _step_share(scene, n1, n2) + substeps)
     m = 4 * n
     # the padded kernels of the set-up are freed before the operators are formed
     peak = parts["kernel spectra"] + parts["base"] + max(

@@ -36,7 +36,7 @@ import numpy as np
 from .coupling import InstantResult, Previous, solve_instant
 from .normal import COARSE_TOL, COARSEST, NormalResult, prolong, restrict, solve_normal
 
-__all__ = ["MARGIN", "SMALLEST_GRID", "LARGEST_SHARE", "solve_in_window"]
+__all__ = ["LARGEST_SHARE", "MARGIN", "SIDE_STEP", "SMALLEST_GRID", "solve_in_window"]
 
 #: Cells added on each side of the predicted contact, as a fraction of its extent [1]
 #: (at least two cells).
