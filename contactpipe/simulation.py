@@ -510,7 +510,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
             previous = self_similar_start(previous, f / f_last, pb.similar)
         f_last = f
         controls = pb.controls(k, f)
-        windowed = controls is None and (not first or fractions.size > 1 and pb.similar is not None)
+        windowed = not first or fractions.size > 1 and pb.similar is not None
         res = (solve_in_window if windowed else solve_instant)(
             op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,
             pb.limits_of(f), controls=controls)

@@ -20,7 +20,9 @@ next instant's slip need it; 1 to 3.5 FFT pairs of the grid); the result stands 
 contact cell lies on the window's outer ring and no cell outside the window would close
 (hi + u3 − ω3 below −tol × max u3). Otherwise the window takes those cells in, its margin
 doubles and the instant is solved again (from the window's pressure); a window that would
-cover more than :data:`LARGEST_SHARE` of the grid gives way to the grid.
+cover more than :data:`LARGEST_SHARE` of the grid gives way to the grid. Under general
+controls (moments, rotations, displacement control) the window's cells keep their moment
+arms, and the check takes the rotations into the gap (− φ1 x2 − φ2 x1).
 
 The window is taken from the instant's start: the pressure and shear of the last instant
 (for a preload sub-step, stretched self-similarly, :mod:`.warm_start`), or, with nothing in
@@ -51,12 +53,13 @@ SIDE_STEP = 8
 
 def solve_in_window(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                     limits, controls=None) -> InstantResult:
-    """One force-controlled instant (W and T given, rotations held at zero), solved on a
-    window of cells around its predicted contact when that saves work, else on the whole
-    grid; the arguments are those of :func:`.coupling.solve_instant` (``controls`` must
-    be None). A normal solution given in ``previous.normal`` is reused as it is, cut to
-    the window (its K33 p of the whole grid then spares that product). Grids under
-    :data:`SMALLEST_GRID` cells a side are solved whole.
+    """One instant solved on a window of cells around its predicted contact when that
+    saves work, else on the whole grid; the arguments are those of
+    :func:`.coupling.solve_instant` (``controls``, where given, cut to the window: the
+    moment arms of its cells). A normal solution given in ``previous.normal`` is reused as
+    it is, cut to the window (its K33 p of the whole grid then spares that product). The
+    whole grid serves grids under :data:`SMALLEST_GRID` cells a side, and an instant under
+    ``controls`` with nothing in contact yet (no load to estimate the contact from).
 
     Returns
     -------
@@ -64,26 +67,26 @@ def solve_in_window(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         On the whole grid: p and q are zero outside the window, u is the displacement of
         every cell, ``normal`` the normal solution with its K33 p of the whole grid.
     """
-    if controls is not None:
-        raise ValueError("a windowed instant takes W and T alone (controls=None)")
     n1, n2 = gap.shape
-    whole = (lambda: solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits))
+    whole = (lambda: solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits,
+                                   controls=controls))
     if op.rigid or min(n1, n2) < SMALLEST_GRID:
         return whole()
     support = _support(previous)
-    if support is None:
+    if support is None and controls is None:
         support = _coarse_contact(op, gap + U[2], W, cell_area, limits)
-        if support is None:
-            return whole()
+    if support is None:
+        return whole()
     start = previous
     for attempt in range(3):
         window = _window(support, (n1, n2), MARGIN * 2 ** attempt)
         if window is None:
             return whole()
-        res = _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, start, limits)
+        res = _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, start, limits,
+                        controls)
         if res is None:
             return whole()
-        grown = _outside(res, window, gap, U, limits.tol)
+        grown = _outside(res, window, gap, limits.tol, controls)
         if grown is None:
             return res
         # the contact reached the window's edge or closes outside it: take those cells
@@ -134,9 +137,11 @@ def _window(support, shape, margin):
     return tuple(slice(s, s + c) for s, c in sides)
 
 
-def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits):
+def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits, controls):
     """The instant solved on ``window``, put back on the grid; None if it failed there."""
     r, c = window
+    if controls is not None:              # the moment arms of the window's cells
+        controls = replace(controls, x1=controls.x1[r], x2=controls.x2[c])
     sub = op.window(r.stop - r.start, c.stop - c.start)
     before = sub.conv.pairs
     reused = previous.normal
@@ -144,7 +149,8 @@ def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits):
     prev = Previous(previous.q[:, r, c], previous.u[:, r, c], previous.p_guess[r, c],
                     cut, previous.motion)
     m = mu if np.ndim(mu) == 0 else mu[r, c]
-    res = solve_instant(sub, gap[r, c], U[:, r, c], W, T, cell_area, m, plan, prev, limits)
+    res = solve_instant(sub, gap[r, c], U[:, r, c], W, T, cell_area, m, plan, prev, limits,
+                        controls=controls)
     share = sub.conv.n1 * sub.conv.n2 / (op.conv.n1 * op.conv.n2)
     op.conv.charge((sub.conv.pairs - before) * share)
     if not res.converged:
@@ -184,9 +190,10 @@ def _displacement(op, plan, U, p, q, Ap=None):
     return u, Ap
 
 
-def _outside(res, window, gap, U, tol):
+def _outside(res, window, gap, tol, controls=None):
     """None when the window held the contact; else the cells it must take in as well (the
-    contact's cells on the window's outer ring, the cells outside that would close)."""
+    contact's cells on the window's outer ring, the cells outside that would close: the
+    gap hi + u3 − ω3 − φ1 x2 − φ2 x1 below −tol × max u3)."""
     r, c = window
     n1, n2 = gap.shape
     inner = np.zeros(gap.shape, bool)
@@ -196,7 +203,10 @@ def _outside(res, window, gap, U, tol):
     inside[r, c] = True
     u3 = res.u[2]
     scale = float(np.abs(u3[inside]).max()) if inside.any() else 0.0
-    closing = ~inside & (gap + u3 - res.omega3 < -tol * scale)
+    h = gap + u3 - res.omega3
+    if controls is not None and np.any(res.phi):
+        h = h - res.phi[0] * controls.x2[None, :] - res.phi[1] * controls.x1[:, None]
+    closing = ~inside & (h < -tol * scale)
     edge = inside & ~inner & (res.p > 0.0)
     grow = closing | edge
     return grow if grow.any() else None
