@@ -281,7 +281,7 @@ class ContactOperator:
         if conv.n1 % 2 or conv.n2 % 2:
             return None
         c1, c2 = conv.n1 // 2, conv.n2 // 2
-        fine = scipy.fft.irfft2(self.k["33"] * (conv.m1 * conv.m2), s=(conv.m1, conv.m2))
+        fine = self._in_space("33")
         d1, d2 = np.arange(-(c1 - 1), c1), np.arange(-(c2 - 1), c2)
         acc = np.zeros((d1.size, d2.size))
         for e1 in (-1, 0, 1):
@@ -290,16 +290,33 @@ class ContactOperator:
                 acc += w * fine[np.ix_((2 * d1 + e1) % conv.m1, (2 * d2 + e2) % conv.m2)]
         kernel = np.zeros((2 * c1, 2 * c2))
         kernel[np.ix_(d1 % (2 * c1), d2 % (2 * c2))] = acc
-        coarse = object.__new__(ContactOperator)
         # FFTW_ESTIMATE: a coarse grid serves a few dozen transforms of a cold start;
         # measured plans for 64², 32², 16² took 0.35 s together and ran no faster
         # (0.104 / 0.023 / 0.008 ms a pair against 0.107 / 0.023 / 0.007)
-        coarse.conv = convolver(c1, c2, conv.backend, conv.threads, "FFTW_ESTIMATE")
-        coarse.w1, coarse.w2, coarse.rigid = self.w1, self.w2, False
-        coarse.cell = None if self.cell is None else (2.0 * self.cell[0], 2.0 * self.cell[1])
+        coarse = self._derived_on(convolver(c1, c2, conv.backend, conv.threads,
+                                            "FFTW_ESTIMATE"),
+                                  None if self.cell is None else
+                                  (2.0 * self.cell[0], 2.0 * self.cell[1]))
         coarse.k = {"33": coarse.conv.kernel_spectrum(kernel)}
-        coarse._derived = {}
         return coarse
+
+    def _derived_on(self, conv, cell):
+        """An operator of another grid (``conv``, cells ``cell``) with this one's creep
+        weights; its kernels ``k`` are the caller's to set."""
+        sub = object.__new__(ContactOperator)
+        sub.conv, sub.cell, sub.w1, sub.w2, sub.rigid = conv, cell, self.w1, self.w2, self.rigid
+        sub._derived, sub.k = {}, None
+        return sub
+
+    def _in_space(self, key):
+        """Kernel ``key`` on the padded grid in real space (one inverse real FFT of its
+        spectrum, set-up work not counted in FFT pairs; kept until :meth:`drop_windows`)."""
+        kept = self._derived.setdefault(("kernels",), {})
+        if key not in kept:
+            conv = self.conv
+            kept[key] = scipy.fft.irfft2(self.k[key] * (conv.m1 * conv.m2),
+                                         s=(conv.m1, conv.m2))
+        return kept[key]
 
     def window(self, c1, c2):
         """The operator of a c1 x c2 block of this grid's cells: the same influence
@@ -328,27 +345,20 @@ class ContactOperator:
         conv = self.conv
         if not (0 < c1 <= conv.n1 and 0 < c2 <= conv.n2):
             raise ValueError(f"a window of {c1} x {c2} cells on a {conv.n1} x {conv.n2} grid")
-        sub = object.__new__(ContactOperator)
         # FFTW_ESTIMATE: a run meets many window sizes; measured plans took paper fig. 3
         # (128², 200 steps) from 7.9-9.3 to 10.5-10.6 s without wisdom, and ran no faster
         # with it (7.0-7.6 s against 6.9-7.2)
-        sub.conv = Convolver(c1, c2, backend=conv.backend, threads=conv.threads,
-                             planner="FFTW_ESTIMATE")
-        sub.w1, sub.w2, sub.rigid, sub.cell = self.w1, self.w2, self.rigid, self.cell
-        sub._derived, sub.k = {}, None
+        sub = self._derived_on(Convolver(c1, c2, backend=conv.backend, threads=conv.threads,
+                                         planner="FFTW_ESTIMATE"), self.cell)
         if self.rigid:
             return sub
-        if ("kernels",) not in self._derived:
-            self._derived[("kernels",)] = {
-                key: scipy.fft.irfft2(spectrum * (conv.m1 * conv.m2), s=(conv.m1, conv.m2))
-                for key, spectrum in self.k.items()}
         d1, d2 = np.arange(-(c1 - 1), c1), np.arange(-(c2 - 1), c2)
         take = np.ix_(d1 % conv.m1, d2 % conv.m2)
         put = np.ix_(d1 % (2 * c1), d2 % (2 * c2))
         sub.k = {}
-        for key, full in self._derived[("kernels",)].items():
+        for key in self.k:
             kernel = np.zeros((2 * c1, 2 * c2))
-            kernel[put] = full[take]
+            kernel[put] = self._in_space(key)[take]
             sub.k[key] = sub.conv.kernel_spectrum(kernel)
         return sub
 
