@@ -332,19 +332,18 @@ def _step_share(scene, n1, n2) -> float:
     the share of the grid's cells in the window around the Hertz contact under the
     instantaneous (glassy) moduli, the smallest of a creeping contact (its extent,
     :data:`MARGIN` on each side, sides rounded up to :data:`SIDE_STEP`); 1 where no window
-    serves: a grid under
-    :data:`SMALLEST_GRID`, a contact without an estimate or whose window would exceed
-    :data:`LARGEST_SHARE`."""
+    serves: a grid under :data:`SMALLEST_GRID`, a contact without an estimate or whose
+    window would exceed :data:`LARGEST_SHARE`."""
     if min(n1, n2) < SMALLEST_GRID:
         return 1.0
     axes, size = scene.hertz_semi_axes("instantaneous"), scene.resolved_grid_size()
     if axes is None or size is None:
         return 1.0
     share = 1.0
-    for a, side, n in zip(axes, size, (n1, n2)):
-        cells = 2.0 * float(a) / float(side) * n
-        side = SIDE_STEP * math.ceil((cells + 2 * max(2.0, MARGIN * cells)) / SIDE_STEP)
-        share *= min(n, side) / n
+    for a, length, n in zip(axes, size, (n1, n2)):
+        cells = 2.0 * float(a) / float(length) * n             # the contact's extent
+        c = SIDE_STEP * math.ceil((cells + 2 * max(2.0, MARGIN * cells)) / SIDE_STEP)
+        share *= min(n, c) / n
     return share if np.isfinite(share) and 0.0 < share <= LARGEST_SHARE else 1.0
 
 

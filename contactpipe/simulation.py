@@ -503,17 +503,16 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
                    and _same_normal(pb.program, k) and st.normal is not None)
     iterations, passes, f_last = 0, 0, 0.0
     fractions = pb.fractions(first, _drive(pb.program, k))
+    windowed = not first or fractions.size > 1 and pb.similar is not None   # solver.window
     for f in fractions:
         sub = pb.sub_plan(first)
         previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None, st.motion)
         if f_last > 0.0 and pb.similar is not None:     # a preload sub-step: its start
             previous = self_similar_start(previous, f / f_last, pb.similar)
         f_last = f
-        controls = pb.controls(k, f)
-        windowed = not first or fractions.size > 1 and pb.similar is not None
         res = (solve_in_window if windowed else solve_instant)(
             op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,
-            pb.limits_of(f), controls=controls)
+            pb.limits_of(f), controls=pb.controls(k, f))
         iterations += res.iterations
         passes += res.passes
         if not res.converged:
