@@ -14,7 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 
-from contactpipe.solver.cg import Constraints, box_cg, fista, project_box_sum, project_rows
+from contactpipe.solver.cg import (ComponentSums, Constraints, box_cg, fista, project_box_sum,
+                                   project_rows)
 
 from helpers import box_kkt_violation, box_qp_exact, spd_matrix
 
@@ -544,3 +545,48 @@ def test_block_sums_restore_leaves_a_block_that_holds():
     np.testing.assert_array_equal(out[0], x[0])
     assert abs(out[1].sum() - target[1]) <= 1e-12 * np.abs(out[1]).sum()
     assert not np.array_equal(out[1], x[1])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_component_sums_match_the_dense_rows_bit_for_bit(seed):
+    """ComponentSums (the vector form's force rows Σq1, Σq2) against the same rows as dense
+    Constraints: the multipliers, the rigid field, the sums and the kept direction agree
+    bit for bit on random fields and masks (16 x 12 cells)."""
+    rng = np.random.default_rng(seed)
+    shape = (16, 12)
+    target = rng.normal(size=2) * 10.0
+    fast = ComponentSums(target, shape)
+    rows = np.zeros((2, 2) + shape)
+    rows[0, 0] = rows[1, 1] = 1.0
+    dense = Constraints(rows, target, sums=True)
+    g, z = rng.normal(size=(2, 2) + shape)
+    cells = rng.random(shape) < 0.4
+    lam = dense.fit(g, cells)
+    assert np.array_equal(fast.fit(g, cells), lam)
+    assert np.array_equal(g - fast.field(lam), g - dense.field(lam))
+    assert np.array_equal(fast.sums_of(z), dense.sums_of(z))
+    assert np.array_equal(fast.keep(z, cells), dense.keep(z, cells))
+    assert np.array_equal(fast.fit(g, np.zeros(shape, bool)), np.zeros(2))
+    np.testing.assert_allclose(fast.sums_of(fast.keep(z, cells)), 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_component_sums_shift_is_the_disk_projection_or_declines(seed):
+    """ComponentSums.shift is project_rows' projection onto {|x| <= rho, Σx = f} of the
+    moving cells where a uniform shift keeps them in their disks (closed form, to 1e-12 of
+    the target), and None where a cell would leave its disk."""
+    rng = np.random.default_rng(seed)
+    shape = (10, 8)
+    rho = rng.uniform(1.0, 2.0, shape)
+    y = 0.3 * rng.normal(size=(2,) + shape)
+    cells = rng.random(shape) < 0.5
+    C = ComponentSums(y.reshape(2, -1).sum(axis=1) + rng.normal(size=2), shape)
+    x = C.shift(y, cells, rho)
+    assert x is not None
+    P = project_rows(y, C, cells, "disk", rho=rho)
+    np.testing.assert_allclose(x, P, atol=1e-12 * float(np.abs(C.target).max() + 1.0))
+    np.testing.assert_allclose(C.sums_of(x), C.target, rtol=1e-12)
+    assert np.array_equal(x[:, ~cells], y[:, ~cells])
+    far = ComponentSums(C.target + 50.0 * np.count_nonzero(cells), shape)
+    assert far.shift(y, cells, rho) is None
+    assert C.shift(y, np.zeros(shape, bool), rho) is None
