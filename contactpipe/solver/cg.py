@@ -198,9 +198,9 @@ class ComponentSums(Constraints):
             return None
         d = (self.target - self.sums_of(y)) / n
         x = y + np.multiply(cells, d.reshape(self.m, 1, 1))
-        if np.any(np.hypot(x[0], x[1])[cells] > rho[cells]):
-            return None
-        return x
+        out = np.hypot(x[0], x[1]) > rho
+        out &= cells
+        return None if out.any() else x
 
 
 class BlockSums(Constraints):

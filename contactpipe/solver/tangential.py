@@ -223,7 +223,8 @@ def _vector_step(op, q, Aq, tau, t, r, rho, con, cells, scale, lag, tol):
     if not fix.any():
         return q_new, Aq - tau * r, np.abs(q_new - q).sum() / scale, lag
     stepped = q_new.copy()
-    q_new[:, fix] *= rho[fix] / m[fix]
+    onto = np.divide(rho, m, out=np.ones_like(m), where=fix)   # 1 where nothing moves
+    q_new *= onto
     q_new = _restore_vector(q_new, rho, con, stick & ~over)
     err = np.abs(q_new - q).sum() / scale
     lag_step = float(np.abs(q_new - stepped).sum()) / scale
@@ -306,6 +307,7 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
     q = _restore_vector(q, rho, con, movable & ~near)
     Aq = op.tangential_vector(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
     scale = max(float(rho.sum()), 1e-300)
+    rho_safe = np.where(movable, rho, 1.0)
     t = np.zeros_like(q)
     rz_old = 1.0
     sets_old = None
@@ -356,8 +358,9 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
             break
         tau = float(np.sum(gr * t)) / denom
         if turning.any():       # no cell turns by more than half a radian in one step
-            spin = np.hypot(t[0], t[1]) / np.where(rho > 0, rho, 1.0)
-            spin_max = float(spin[turning].max())
+            spin = np.hypot(t[0], t[1])
+            spin /= rho_safe
+            spin_max = float(spin.max(where=turning, initial=0.0))
             if tau * spin_max > 0.5:
                 tau = 0.5 / spin_max
                 sets_old = None
