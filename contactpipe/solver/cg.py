@@ -198,7 +198,9 @@ class ComponentSums(Constraints):
             return None
         d = (self.target - self.sums_of(y)) / n
         x = y + np.multiply(cells, d.reshape(self.m, 1, 1))
-        out = np.hypot(x[0], x[1]) > rho
+        m = x[0] * x[0]
+        m += x[1] * x[1]
+        out = m > rho * rho               # outside its disk (squared: no root needed)
         out &= cells
         return None if out.any() else x
 
