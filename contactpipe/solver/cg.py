@@ -48,8 +48,9 @@ import numpy as np
 #: step, kept where it ascends) up to the last (a gradient step, which always ascends) [1].
 DAMPING = (1e-12, 1e4)
 
-__all__ = ["ComponentSums", "BlockSums", "BoxResult", "Constraints", "box_cg", "fista", "project_box_sum",
-           "project_rows", "box_jacobian", "box_project", "disk_jacobian", "disk_project"]
+__all__ = ["BlockSums", "BoxResult", "ComponentSums", "Constraints", "box_cg", "fista",
+           "project_box_sum", "project_rows", "box_jacobian", "box_project", "disk_jacobian",
+           "disk_project"]
 
 
 @dataclass

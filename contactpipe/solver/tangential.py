@@ -206,11 +206,11 @@ CURVATURE_SHIFT = 0.3
 STALL = 50
 
 
-def _magnitude(v, out=None):
+def _magnitude(v):
     """|v| per cell of a vector field v (2, N1, N2), as sqrt(v1² + v2²): a third of
     ``np.hypot``'s time, which guards against overflow that shear in Pa never reaches (the
     vector CG takes three magnitudes per iteration) [unit of v]."""
-    m = np.multiply(v[0], v[0], out=out)
+    m = v[0] * v[0]
     m += v[1] * v[1]
     return np.sqrt(m, out=m)
 
