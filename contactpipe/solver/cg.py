@@ -143,6 +143,11 @@ class Constraints:
         out[..., cells] -= (mu @ Cw).reshape(lead + (-1,))
         return out
 
+    def shift(self, y, cells, rho):
+        """The disk projection of :func:`project_rows` in closed form where the rows admit
+        one (:meth:`ComponentSums.shift`); None here: general rows need the dual solve."""
+        return None
+
     def restore(self, x, lo, hi, free, movable):
         """x with C x = f again, by projecting the free cells (then, when they cannot carry
         the rows, every movable cell) onto {bounds, C x = f} (:func:`project_rows`)."""
@@ -192,8 +197,9 @@ class ComponentSums(Constraints):
 
     def shift(self, y, cells, rho):
         """The projection of y's ``cells`` onto {|x| <= rho, C x = f} (:func:`project_rows`,
-        kind "disk") when a uniform shift of those cells meets the rows inside their disks
-        (then it is that shift, the multipliers' closed form); None otherwise."""
+        kind "disk", two components) when a uniform shift of those cells meets the rows
+        inside their disks (then it is that shift, the multipliers' closed form); None
+        otherwise."""
         n = np.count_nonzero(cells)
         if n == 0:
             return None

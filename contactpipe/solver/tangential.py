@@ -170,16 +170,16 @@ def _restore_vector(q, rho, con, stick):
     """Meet the rows again by projecting the stick cells (then, when they cannot carry
     them, every contact cell) onto their disks and the rows: one shift vector, found by
     a dual Newton solve (:func:`contactpipe.solver.cg.project_rows`). Under the force rows
-    alone the shift is first tried in closed form, uniform over the cells
-    (:meth:`~contactpipe.solver.cg.ComponentSums.shift`): where it keeps them in their
-    disks it is the projection (the vector CG restores its rows after nearly every step;
-    the dual Newton solve cost a fifth of a fretting step's time)."""
+    alone the shift is first had in closed form, uniform over the cells
+    (:meth:`~contactpipe.solver.cg.Constraints.shift`): where it keeps them in their disks
+    it is the projection (the vector CG restores its rows after nearly every step; the
+    dual Newton solve cost a fifth of a fretting step's time)."""
     if con.m == 0:
         return q
     for cells in (stick, rho > 0):
         if not cells.any():
             continue
-        out = con.shift(q, cells, rho) if isinstance(con, ComponentSums) else None
+        out = con.shift(q, cells, rho)
         if out is None:
             out = project_rows(q, con, cells, "disk", rho=rho)
         tol = 1e-11 * (np.abs(con.target).max(initial=0.0) + rho.sum())
@@ -245,7 +245,8 @@ def _vector_step(op, q, Aq, tau, t, r, rho, con, cells, scale, lag, tol):
 def _vector_direction(M, gt, radial, qhat, rho, a_self, free, turning):
     """The preconditioned residual z of :func:`_vector_cg` (before the rows are kept):
     ``gt`` the residual (tangential on turning cells) [m], ``radial`` its part along
-    q̂ [m], ``a_self`` the self-influence [m/Pa].
+    q̂ [m], ``rho`` the bound μp with 1 off the contact [Pa] (only turning cells, in
+    contact, read it), ``a_self`` the self-influence [m/Pa].
 
     ``M`` None: TangCG's diagonal scaling, relative to a stick cell. Else the operator's
     ``tangential_preconditioner``: z = S M(S gt, d̄) [Pa], M ≈ (K_t + d̄ I)⁻¹ the
@@ -260,7 +261,7 @@ def _vector_direction(M, gt, radial, qhat, rho, a_self, free, turning):
             w = np.where(turning, rho * a_self / (rho * a_self + np.abs(radial)), 1.0)
         return np.where(free | turning, gt * w, 0.0)
     # curvature of the circles [m/Pa]: |r·q̂|/ρ on turning cells, 0 on free ones
-    curv = np.where(turning, np.abs(radial) / np.where(rho > 0, rho, 1.0), 0.0)
+    curv = np.where(turning, np.abs(radial) / rho, 0.0)
     shift = CURVATURE_SHIFT * float(np.median(curv[turning])) if turning.any() else 0.0
     S = np.where(free | turning, np.sqrt((a_self + shift) / (a_self + curv)), 0.0)
     z = M(S * gt, shift)
@@ -310,13 +311,13 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
     make = getattr(op, "tangential_preconditioner", None) if precondition else None
     M = make() if make is not None else None
     q, _ = disk_project(np.where(movable, q0, 0.0), rho)
-    mag = np.hypot(q[0], q[1])
+    mag = _magnitude(q)
     near = movable & (mag >= rho * (1.0 - SNAP * tol)) & (mag > 0)
     q[:, near] *= rho[near] / mag[near]
     q = _restore_vector(q, rho, con, movable & ~near)
     Aq = op.tangential_vector(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
     scale = max(float(rho.sum()), 1e-300)
-    rho_safe = np.where(movable, rho, 1.0)
+    rho_safe = np.where(movable, rho, 1.0)      # divides where only contact cells count
     t = np.zeros_like(q)
     rz_old = 1.0
     sets_old = None
@@ -341,7 +342,7 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
         turning = at_bound & ~released
         free = stick | released
         gt = np.where(turning, gr - radial * qhat, gr)
-        z = _vector_direction(M, gt, radial, qhat, rho, a_self, free, turning)
+        z = _vector_direction(M, gt, radial, qhat, rho_safe, a_self, free, turning)
         z = con.keep(z, free)   # the rows stay put along the direction
         rz = float(np.sum(gt * z))
         if not rz > 0.0:
