@@ -17,7 +17,7 @@ from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
 from contactpipe.solver.normal import solve_normal
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
 
-from helpers import A_HERTZ, MU, STEEL, W, make_scene
+from helpers import A_HERTZ, MU, STEEL, W, fretting_scene, make_scene
 
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 TOL = 1e-9
@@ -184,6 +184,26 @@ def test_preconditioned_vector_passes_reach_the_diagonally_scaled_instants():
         assert np.abs(a.p - b.p).max() <= 1e-7 * scale
         assert np.abs(a.q - b.q).max() <= 1e-7 * MU * scale
     assert fast_pairs < slow_pairs
+
+
+def test_powell_restarts_reach_the_same_coarse_vector_steps_sooner(monkeypatch):
+    """Coarse steps (steel on steel fretting, 32², 10 steps: T moves by a quarter of T*
+    a step) turn many cells at once; their projections back onto the circles spoil the
+    vector CG's conjugacy with every set fixed. Powell's restart reaches the same instants
+    (p within 1e-7 max p, q within 1e-7 mu max p, the same stick/slip status; measured 0,
+    3.8e-9 and no cell) in fewer iterations (measured 192 against 256 after the first
+    instant, 693 against 892 FFT pairs)."""
+    def run():
+        return cp.simulate(fretting_scene(n=32, steps=10), tangential="vector")
+    fast = run()
+    monkeypatch.setattr(tangential_module, "POWELL_RESTART", np.inf)
+    slow = run()
+    scale = float(slow.p.max())
+    assert float(np.abs(fast.p - slow.p).max()) <= 1e-7 * scale
+    for name in ("q1", "q2"):
+        assert float(np.abs(fast[name] - slow[name]).max()) <= 1e-7 * MU * scale
+    assert int((fast.status != slow.status).sum()) == 0
+    assert fast.iterations.values[1:].sum() < 0.9 * slow.iterations.values[1:].sum()
 
 
 def test_vector_warm_starts_reach_the_plain_instants():

@@ -201,6 +201,13 @@ LAG = 0.1
 #: steel-on-aluminium fretting at 64²; 0: 3019, unpreconditioned: 1554) [1].
 CURVATURE_SHIFT = 0.3
 
+#: The vector CG restarts its conjugate sequence when |g_k·z_(k-1)| ≥ this x g_k·z_k
+#: (Powell 1977, "Restart procedures for the conjugate gradient method"): its turning
+#: cells make it a nonlinear CG. Without it a 12-step steel-on-steel fretting at 128²
+#: spent 223 FFT pairs a step, solves of 200-285 iterations converging linearly with
+#: every set fixed; with it 78 (docs/design-choices.md) [1].
+POWELL_RESTART = 0.2
+
 #: Iterations of the vector CG without halving its best step before it hands over to
 #: the projected gradient (it stalls where nearly every cell turns on its circle) [1].
 STALL = 50
@@ -270,6 +277,20 @@ def _vector_direction(M, gt, radial, qhat, rho, a_self, free, turning):
     return np.where(turning, z - along * qhat, z)
 
 
+def _conjugate(t, z, z_old, rz, rz_old, gt, gr, qhat, turning):
+    """The vector CG's next direction from its last one ``t``: the last transported onto
+    the current tangents of turning cells, conjugated with z (rz = gt·z [m Pa]); or z
+    itself, a new conjugate sequence, by Powell's restart: the turning cells'
+    projections back onto their circles spoil conjugacy without changing any set, so a
+    residual no longer nearly orthogonal to the last one (|gt·z_old| ≥
+    :data:`POWELL_RESTART` rz), or a direction that does not descend, restarts."""
+    if abs(float(np.sum(gt * z_old))) >= POWELL_RESTART * rz:
+        return z
+    tr = qhat[0] * t[0] + qhat[1] * t[1]
+    t_new = z + (rz / rz_old) * np.where(turning, t - tr * qhat, t)
+    return t_new if float(np.sum(gr * t_new)) > 0.0 else z
+
+
 def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True,
                exact=True):
     """Full vector form by projected CG (the fast path of :func:`solve_vector`; ``con``
@@ -293,6 +314,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
     * after the exact line search, stick cells pushed past the disk are projected radially
       (they join the slip set) and turning cells are put back on their circles; the rows
       are restored by projecting the stick cells (:func:`_restore_vector`).
+    * the conjugate sequence restarts where a set changes, and by Powell's test where
+      the projections onto the circles have spoiled conjugacy (:func:`_conjugate`).
 
     Each iteration costs one operator application (two FFT pairs; the filter half a pair
     more), and a second one only when a stick cell left its disk or the circle corrections
@@ -321,6 +344,7 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
     t = np.zeros_like(q)
     rz_old = 1.0
     sets_old = None
+    z_old = None
     err = np.inf
     lam = np.zeros(con.m)
     best, best_it = np.inf, 0
@@ -352,14 +376,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
         reset = (released.any() or sets_old is None
                  or not (np.array_equal(free, sets_old[0])
                          and np.array_equal(turning, sets_old[1])))
-        if reset:
-            t = z
-        else:
-            # transport the old direction onto the current tangents of turning cells
-            tr = qhat[0] * t[0] + qhat[1] * t[1]
-            t_old = np.where(turning, t - tr * qhat, t)
-            t = z + (rz / rz_old) * t_old
-        rz_old = rz
+        t = z if reset else _conjugate(t, z, z_old, rz, rz_old, gt, gr, qhat, turning)
+        rz_old, z_old = rz, z
         sets_old = sets
         r = op.tangential_vector(t)
         denom = float(np.sum(r * t))
