@@ -12,6 +12,7 @@ import pytest
 import contactpipe as cp
 from contactpipe.simulation import grid_coordinates
 from contactpipe.solver import coupling as coupling_module
+from contactpipe.solver import disk_cg as disk_cg_module
 from contactpipe.solver import tangential as tangential_module
 from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
 from contactpipe.solver.normal import solve_normal
@@ -150,11 +151,11 @@ def _vector_path(plain, precondition=True):
     the warm starts that follow the bound and without the lagged A q of the vector CG;
     ``precondition`` False: the vector CG with TangCG's diagonal scaling alone, every
     pass's A q exact."""
-    saved = (coupling_module.follow_bound, tangential_module.LAG, tangential_module.SNAP,
+    saved = (coupling_module.follow_bound, disk_cg_module.LAG, disk_cg_module.SNAP,
              coupling_module.solve_vector)
     if plain:
         coupling_module.follow_bound = lambda q, old, new: q
-        tangential_module.LAG = tangential_module.SNAP = 0.0
+        disk_cg_module.LAG = disk_cg_module.SNAP = 0.0
     if plain or not precondition:
         coupling_module.solve_vector = lambda *a, **k: tangential_module.solve_vector(
             *a, **{**k, "precondition": precondition, "exact": True})
@@ -168,7 +169,7 @@ def _vector_path(plain, precondition=True):
             out.append(res)
         return out, op.conv.pairs - pairs0
     finally:
-        (coupling_module.follow_bound, tangential_module.LAG, tangential_module.SNAP,
+        (coupling_module.follow_bound, disk_cg_module.LAG, disk_cg_module.SNAP,
          coupling_module.solve_vector) = saved
 
 
@@ -186,24 +187,28 @@ def test_preconditioned_vector_passes_reach_the_diagonally_scaled_instants():
     assert fast_pairs < slow_pairs
 
 
-def test_powell_restarts_reach_the_same_coarse_vector_steps_sooner(monkeypatch):
+def test_the_circles_curvature_in_the_line_search_reaches_coarse_vector_steps_sooner(
+        monkeypatch):
     """Coarse steps (steel on steel fretting, 32², 10 steps: T moves by a quarter of T*
-    a step) turn many cells at once; their projections back onto the circles spoil the
-    vector CG's conjugacy with every set fixed. Powell's restart reaches the same instants
-    (p within 1e-7 max p, q within 1e-7 mu max p, the same stick/slip status; measured 0,
-    3.8e-9 and no cell) in fewer iterations (measured 192 against 256 after the first
-    instant, 693 against 892 FFT pairs)."""
+    a step) turn many cells at once. The vector CG's line search along the circles
+    (tᵀ(A + D) t, D the circles' curvature on turning cells) reaches the same instants as
+    the line search along the tangents alone (tᵀA t): p within 1e-7 max p, q within 1e-7
+    mu max p, the same stick/slip status (measured 0, 3.8e-9 and no cell), in fewer
+    iterations (measured 170 against 256 after the first instant)."""
     def run():
         return cp.simulate(fretting_scene(n=32, steps=10), tangential="vector")
     fast = run()
-    monkeypatch.setattr(tangential_module, "POWELL_RESTART", np.inf)
+    monkeypatch.setattr(disk_cg_module, "curved", lambda t, r, curv: float(np.sum(r * t)))
     slow = run()
     scale = float(slow.p.max())
+    print(float(np.abs(fast.p - slow.p).max()) / scale,
+          max(float(np.abs(fast[n] - slow[n]).max()) for n in ("q1", "q2")) / (MU * scale),
+          fast.iterations.values[1:].sum(), slow.iterations.values[1:].sum())
     assert float(np.abs(fast.p - slow.p).max()) <= 1e-7 * scale
     for name in ("q1", "q2"):
         assert float(np.abs(fast[name] - slow[name]).max()) <= 1e-7 * MU * scale
     assert int((fast.status != slow.status).sum()) == 0
-    assert fast.iterations.values[1:].sum() < 0.9 * slow.iterations.values[1:].sum()
+    assert fast.iterations.values[1:].sum() < 0.8 * slow.iterations.values[1:].sum()
 
 
 def test_vector_warm_starts_reach_the_plain_instants():

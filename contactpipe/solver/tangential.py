@@ -42,6 +42,7 @@ import numpy as np
 
 from .cg import (ComponentSums, Constraints, box_cg, disk_project, fista, project_box_sum,
                  project_rows)
+from .disk_cg import disk_cg, disk_start
 
 __all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "disk_project",
            "project_disks_sum", "force_rows", "slip_multipliers"]
@@ -166,248 +167,39 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
                             multipliers=np.zeros(0) if con is not None else None)
 
 
-def _restore_vector(q, rho, con, stick):
-    """Meet the rows again by projecting the stick cells (then, when they cannot carry
-    them, every contact cell) onto their disks and the rows: one shift vector, found by
-    a dual Newton solve (:func:`contactpipe.solver.cg.project_rows`). Under the force rows
-    alone the shift is first had in closed form, uniform over the cells
-    (:meth:`~contactpipe.solver.cg.Constraints.shift`): where it keeps them in their disks
-    it is the projection (the vector CG restores its rows after nearly every step; the
-    dual Newton solve cost a fifth of a fretting step's time)."""
-    if con.m == 0:
-        return q
-    for cells in (stick, rho > 0):
-        if not cells.any():
-            continue
-        out = con.shift(q, cells, rho)
-        if out is None:
-            out = project_rows(q, con, cells, "disk", rho=rho)
-        tol = 1e-11 * (np.abs(con.target).max(initial=0.0) + rho.sum())
-        if np.abs(con.residual(out)).max() <= tol:
-            return out
-        q = out
-    return q
-
-
-#: A warm start's cell within SNAP x tol (relative) of its bound starts on it [1].
-SNAP = 0.1
-
-#: The circle corrections a vector CG may leave out of A q, summed, as a fraction of
-#: its tolerance (A q is recomputed once they would exceed it, and at the end) [1].
-LAG = 0.1
-
-#: The vector CG's filter is shifted by this fraction of the turning cells' median circle
-#: curvature (0.1 / 0.3 / 0.5 / 1: 1156 / 1008 / 1073 / 1154 iterations over a 12-step
-#: steel-on-aluminium fretting at 64²; 0: 3019, unpreconditioned: 1554) [1].
-CURVATURE_SHIFT = 0.3
-
-#: The vector CG restarts its conjugate sequence when |g_k·z_(k-1)| ≥ this x g_k·z_k
-#: (Powell 1977, "Restart procedures for the conjugate gradient method"): its turning
-#: cells make it a nonlinear CG. Without it a 12-step steel-on-steel fretting at 128²
-#: spent 223 FFT pairs a step, solves of 200-285 iterations converging linearly with
-#: every set fixed; with it 78 (docs/design-choices.md) [1].
-POWELL_RESTART = 0.2
-
-#: Iterations of the vector CG without halving its best step before it hands over to
-#: the projected gradient (it stalls where nearly every cell turns on its circle) [1].
-STALL = 50
-
-
-def _magnitude(v):
-    """|v| per cell of a vector field v (2, N1, N2), as sqrt(v1² + v2²): a third of
-    ``np.hypot``'s time, which guards against overflow that shear in Pa never reaches (the
-    vector CG takes three magnitudes per iteration) [unit of v]."""
-    m = v[0] * v[0]
-    m += v[1] * v[1]
-    return np.sqrt(m, out=m)
-
-
-def _vector_step(op, q, Aq, tau, t, r, rho, con, cells, scale, lag, tol):
-    """One step q - tau t of :func:`_vector_cg` (r = A t): stick cells pushed past their
-    disk are projected radially, turning cells put back on their circles, the rows
-    restored. Returns (q, A q, the step's size over ``scale``, the lag).
-
-    The correction back onto the circles is second order in the step: while the
-    corrections summed (``lag``, over ``scale``) stay below :data:`LAG` x ``tol``, A q
-    follows the step alone; beyond that, or when a stick cell left its disk, A q is
-    recomputed (two FFT pairs) and the lag is cleared."""
-    movable, stick, turning = cells
-    q_new = q - tau * t
-    m = _magnitude(q_new)
-    over = movable & (m > rho)
-    fix = over | (turning & (m > 0))
-    if not fix.any():
-        return q_new, Aq - tau * r, np.abs(q_new - q).sum() / scale, lag
-    stepped = q_new.copy()
-    onto = np.divide(rho, m, out=np.ones_like(m), where=fix)   # 1 where nothing moves
-    q_new *= onto
-    q_new = _restore_vector(q_new, rho, con, stick & ~over)
-    err = np.abs(q_new - q).sum() / scale
-    lag_step = float(np.abs(q_new - stepped).sum()) / scale
-    if not (over & ~turning).any() and lag + lag_step <= LAG * tol:
-        return q_new, Aq - tau * r, err, lag + lag_step
-    return q_new, op.tangential_vector(q_new), err, 0.0
-
-
-def _vector_direction(M, gt, radial, qhat, rho, a_self, free, turning):
-    """The preconditioned residual z of :func:`_vector_cg` (before the rows are kept):
-    ``gt`` the residual (tangential on turning cells) [m], ``radial`` its part along
-    q̂ [m], ``rho`` the bound μp with 1 off the contact [Pa] (only turning cells, in
-    contact, read it), ``a_self`` the self-influence [m/Pa].
-
-    ``M`` None: TangCG's diagonal scaling, relative to a stick cell. Else the operator's
-    ``tangential_preconditioner``: z = S M(S gt, d̄) [Pa], M ≈ (K_t + d̄ I)⁻¹ the
-    (−Δ)^½ filter shifted by d̄ = :data:`CURVATURE_SHIFT` x the turning cells' median
-    circle curvature |r·q̂|/ρ, S = √((a + d̄)/(a + d_i)) each cell's own diagonal (d_i = 0
-    on free cells), then cut back to the tangents on turning cells. The curvature
-    outweighs the self-influence 2-10 times on a fretting step's slip annulus, so the
-    unshifted filter (the scalar CG's) is no better than the diagonal; shifted, the
-    iterations fall by a third (docs/design-choices.md)."""
-    if M is None:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            w = np.where(turning, rho * a_self / (rho * a_self + np.abs(radial)), 1.0)
-        return np.where(free | turning, gt * w, 0.0)
-    # curvature of the circles [m/Pa]: |r·q̂|/ρ on turning cells, 0 on free ones
-    curv = np.where(turning, np.abs(radial) / rho, 0.0)
-    shift = CURVATURE_SHIFT * float(np.median(curv[turning])) if turning.any() else 0.0
-    S = np.where(free | turning, np.sqrt((a_self + shift) / (a_self + curv)), 0.0)
-    z = M(S * gt, shift)
-    z *= S
-    along = qhat[0] * z[0] + qhat[1] * z[1]
-    return np.where(turning, z - along * qhat, z)
-
-
-def _conjugate(t, z, z_old, rz, rz_old, gt, gr, qhat, turning):
-    """The vector CG's next direction from its last one ``t``: the last transported onto
-    the current tangents of turning cells, conjugated with z (rz = gt·z [m Pa]); or z
-    itself, a new conjugate sequence, by Powell's restart: the turning cells'
-    projections back onto their circles spoil conjugacy without changing any set, so a
-    residual no longer nearly orthogonal to the last one (|gt·z_old| ≥
-    :data:`POWELL_RESTART` rz), or a direction that does not descend, restarts."""
-    if abs(float(np.sum(gt * z_old))) >= POWELL_RESTART * rz:
-        return z
-    tr = qhat[0] * t[0] + qhat[1] * t[1]
-    t_new = z + (rz / rz_old) * np.where(turning, t - tr * qhat, t)
-    return t_new if float(np.sum(gr * t_new)) > 0.0 else z
-
-
 def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True,
                exact=True):
-    """Full vector form by projected CG (the fast path of :func:`solve_vector`; ``con``
-    the rows, :class:`~contactpipe.solver.cg.Constraints` on (2, N1, N2)).
-
-    Notes
-    -----
-    Preconditioned projected conjugate gradients over all contact cells at once:
-
-    * stick cells (|q| < μp), and slip cells whose residual points into the disk (they
-      re-enter), move along the residual;
-    * the other slip cells may only turn on their circle |q| = μp: the variable is their
-      slip angle θ (Zhao, Vollebregt & Oosterlee 2014, "A fast nonlinear conjugate
-      gradient based method for 3D frictional contact problems"), with the diagonal
-      preconditioner 1/(ρ²a + ρ|r·q̂|) — a the self-influence, r the residual; the second
-      term is the curvature of the circle — which in q-space scales the tangential residual
-      by ρa/(ρa + |r·q̂|) relative to a stick cell; the previous direction is transported
-      to the current tangents;
-    * ``precondition``: the direction filtered as a whole instead
-      (:func:`_vector_direction`), a third fewer iterations for half a pair more each;
-    * after the exact line search, stick cells pushed past the disk are projected radially
-      (they join the slip set) and turning cells are put back on their circles; the rows
-      are restored by projecting the stick cells (:func:`_restore_vector`).
-    * the conjugate sequence restarts where a set changes, and by Powell's test where
-      the projections onto the circles have spoiled conjugacy (:func:`_conjugate`).
+    """Full vector form by the projected CG of :func:`contactpipe.solver.disk_cg.disk_cg`
+    (the fast path of :func:`solve_vector`; ``con`` the rows,
+    :class:`~contactpipe.solver.cg.Constraints` on (2, N1, N2)): stick cells move freely,
+    slip cells turn on their circles, the direction is the (−Δ)^½ filter shifted by the
+    circles' curvature (``precondition``; else TangCG's diagonal scaling), the line search
+    takes that curvature in.
 
     Each iteration costs one operator application (two FFT pairs; the filter half a pair
-    more), and a second one only when a stick cell left its disk or the circle corrections
-    add up (:func:`_vector_step`).
-    A warm start's cells within :data:`SNAP` x tol of their bound start on it (else a
-    bound raised by rounding turns slip cells into stick cells, which slide back in tens
-    of iterations). It stops, not converged, when :data:`STALL` iterations pass without
+    more), and a second one only when the projections' corrections add up. The warm
+    start's cells within :data:`~contactpipe.solver.disk_cg.SNAP` x tol of their bound
+    start on it (:func:`~contactpipe.solver.disk_cg.disk_start`). It stops, not
+    converged, when :data:`~contactpipe.solver.disk_cg.STALL` iterations pass without
     halving its best step. With ``exact`` False a converged result's A q may leave out
-    the last circle corrections (summed, below :data:`LAG` x tol; so may the multipliers
-    fitted to it): for a pass whose product the caller discards, this saves the final
-    recomputation (two FFT pairs).
+    the last corrections (summed, below :data:`~contactpipe.solver.disk_cg.LAG` x tol;
+    so may the multipliers fitted to it): for a pass whose product the caller discards,
+    this saves the final product (two FFT pairs).
     """
     rho = bound
-    movable = rho > 0
-    a_self = op.self_influence("11")
     make = getattr(op, "tangential_preconditioner", None) if precondition else None
     M = make() if make is not None else None
-    q, _ = disk_project(np.where(movable, q0, 0.0), rho)
-    mag = _magnitude(q)
-    near = movable & (mag >= rho * (1.0 - SNAP * tol)) & (mag > 0)
-    q[:, near] *= rho[near] / mag[near]
-    q = _restore_vector(q, rho, con, movable & ~near)
+    q = disk_start(q0, rho, con, tol)
     Aq = op.tangential_vector(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
-    scale = max(float(rho.sum()), 1e-300)
-    rho_safe = np.where(movable, rho, 1.0)      # divides where only contact cells count
-    t = np.zeros_like(q)
-    rz_old = 1.0
-    sets_old = None
-    z_old = None
-    err = np.inf
-    lam = np.zeros(con.m)
-    best, best_it = np.inf, 0
-    lag = 0.0                   # corrections not yet in A q, summed, over scale [1]
-    it = 0
-    for it in range(1, max_iter + 1):
-        if it - best_it > STALL:    # no progress: leave it to the projected gradient
-            break
-        g = Aq + b
-        mag = _magnitude(q)
-        at_bound = movable & (mag >= rho * (1.0 - 1e-12))
-        stick = movable & ~at_bound
-        if stick.any():
-            lam = con.fit(g, stick)
-        gr = g - con.field(lam)
-        qhat = np.where(at_bound, q / np.where(mag > 0, mag, 1.0), 0.0)
-        radial = qhat[0] * gr[0] + qhat[1] * gr[1]
-        released = at_bound & (radial > 0)
-        turning = at_bound & ~released
-        free = stick | released
-        gt = np.where(turning, gr - radial * qhat, gr)
-        z = _vector_direction(M, gt, radial, qhat, rho_safe, a_self, free, turning)
-        z = con.keep(z, free)   # the rows stay put along the direction
-        rz = float(np.sum(gt * z))
-        if not rz > 0.0:
-            err = 0.0 if rz <= 0.0 else np.inf
-            break
-        sets = (free, turning)
-        reset = (released.any() or sets_old is None
-                 or not (np.array_equal(free, sets_old[0])
-                         and np.array_equal(turning, sets_old[1])))
-        t = z if reset else _conjugate(t, z, z_old, rz, rz_old, gt, gr, qhat, turning)
-        rz_old, z_old = rz, z
-        sets_old = sets
-        r = op.tangential_vector(t)
-        denom = float(np.sum(r * t))
-        if denom <= 0.0:
-            err = 0.0
-            break
-        tau = float(np.sum(gr * t)) / denom
-        if turning.any():       # no cell turns by more than half a radian in one step
-            spin = _magnitude(t)
-            spin /= rho_safe
-            spin_max = float(spin.max(where=turning, initial=0.0))
-            if tau * spin_max > 0.5:
-                tau = 0.5 / spin_max
-                sets_old = None
-        q, Aq, err, lag = _vector_step(op, q, Aq, tau, t, r, rho, con,
-                                       (movable, stick, turning), scale, lag, tol)
-        if not err >= 0.0:      # NaN: the iterate is lost
-            err = np.inf
-            break
-        if err < tol:
-            break
-        if err < 0.5 * best:
-            best, best_it = err, it
-    err = max(float(err), float(np.abs(con.residual(q)).max(initial=0.0)) / scale)
-    ok = bool(err < tol) and bool(np.all(np.isfinite(q)))
-    if lag > 0.0 and (exact or not ok):
-        Aq = op.tangential_vector(q)
-    lam = multipliers(con, Aq + b, q, rho)
-    return TangentialResult(q=q, domega=np.zeros(2), Aq=Aq, iterations=it, residual=err,
-                            converged=ok, multipliers=lam)
+    res = disk_cg(op.tangential_vector, b, q, Aq, rho, con, tol, max_iter, M,
+                  op.self_influence("11"), scale=max(float(rho.sum()), 1e-300))
+    Aq = res.Ax
+    if res.pending is not None and (exact or not res.converged):
+        Aq = Aq + op.tangential_vector(res.pending)
+    lam = multipliers(con, Aq + b, res.x, rho)
+    return TangentialResult(q=res.x, domega=np.zeros(2), Aq=Aq, iterations=res.iterations,
+                            residual=res.residual, converged=res.converged,
+                            multipliers=lam)
 
 
 def project_disks_sum(y, rho, target):
@@ -566,8 +358,9 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
         alone.
     exact : bool
         False: a converged result's ``Aq`` and multipliers may lag the last circle
-        corrections by up to :data:`LAG` x tol (:func:`_vector_cg`), for a coupling pass
-        that is not the last (the next pass recomputes its start's product anyway).
+        corrections by up to :data:`~contactpipe.solver.disk_cg.LAG` x tol
+        (:func:`_vector_cg`), for a coupling pass that is not the last (the next pass
+        recomputes its start's product anyway).
 
     Notes
     -----

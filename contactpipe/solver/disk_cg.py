@@ -1,0 +1,378 @@
+"""Projected conjugate gradients over the friction disks |q| ≤ ρ (the vector form's CG),
+optionally with a pressure block.
+
+The unknown is the shear q (2, N1, N2) — or, for a coupled instant solved as one problem
+(:func:`contactpipe.solver.joint.solve_joint_vector`), the stacked x = (p, s1, s2) with
+s = q/μ — and the problem
+
+    minimise  ½ xᵀ A x + bᵀ x   subject to  |s_i| ≤ ρ_i per cell,  C s = f,
+                                           (and p ≥ 0, Σp = W/Δ with a pressure block),
+
+A symmetric positive definite (DC-FFT block convolutions), C the shear's rows
+(:class:`~contactpipe.solver.cg.Constraints`: forces, torque, or none).
+
+The iteration, over all contact cells at once:
+
+* stick cells (|s| < ρ), and slip cells whose residual points into the disk (they
+  re-enter), move along the residual;
+* the other slip cells may only turn on their circle |s| = ρ: the variable is their slip
+  angle θ (Zhao, Vollebregt & Oosterlee 2014, "A fast nonlinear conjugate gradient based
+  method for 3D frictional contact problems"); the previous direction is transported to
+  the current tangents;
+* the direction is the residual filtered by the (−Δ)^½ filter shifted by the circles'
+  curvature (:func:`direction`), or without a filter TangCG's diagonal scaling;
+* the line search measures the step's curvature along the circles, not only along their
+  tangents (:func:`curved`): a turning cell's Hessian is the operator's plus the circle's
+  curvature |r·q̂|/ρ;
+* after the step, stick cells pushed past the disk are projected radially (they join the
+  slip set), turning cells put back on their circles, the rows restored by projecting the
+  stick cells (:func:`restore_rows`);
+* the pressure block, when given, is Polonsky & Keer's: p clipped at 0, its row restored
+  by a clipped shift of the free cells, its direction the (−Δ)^½ filter scaled to K33;
+* the conjugate sequence restarts where a set changes.
+
+Each iteration costs one operator application; the projection's correction to A x is
+left out while the corrections summed stay below :data:`LAG` x tol, then added by one
+product of the correction (a block that did not move costs no forward transform).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .cg import BlockSums, disk_project, project_rows
+
+__all__ = ["CURVATURE_SHIFT", "DiskResult", "LAG", "PressureBlock", "SNAP", "STALL",
+           "curvature", "curved", "direction", "disk_cg", "disk_start", "magnitude",
+           "restore_rows"]
+
+#: A warm start's cell within SNAP x tol (relative) of its bound starts on it [1].
+SNAP = 0.1
+
+#: The circle corrections a CG may leave out of A x, summed, as a fraction of its
+#: tolerance (their product is added once they would exceed it, and at the end) [1].
+LAG = 0.1
+
+#: The filter is shifted by this fraction of the turning cells' median circle curvature
+#: (0.1 / 0.3 / 0.5 / 1: 1156 / 1008 / 1073 / 1154 iterations over a 12-step
+#: steel-on-aluminium fretting at 64²; 0: 3019, unpreconditioned: 1554) [1].
+CURVATURE_SHIFT = 0.3
+
+#: Iterations without halving the best step before the CG stops, not converged (it
+#: stalls where nearly every cell turns on its circle; the vector form's projected
+#: gradient then takes over) [1].
+STALL = 50
+
+
+@dataclass
+class DiskResult:
+    x: np.ndarray               # the iterate, the shape of the start
+    Ax: np.ndarray              # A x, less ``pending`` [m]
+    pending: np.ndarray | None  # projection corrections not yet in Ax (None: none)
+    iterations: int
+    residual: float             # the last step's size, or the rows' miss, relative
+    converged: bool
+
+
+@dataclass
+class PressureBlock:
+    """The pressure block of a joint solve: p ≥ 0 and Σp = ``target`` [Pa] (W/Δ); its
+    direction is the (−Δ)^½ filter of the shear block, unshifted, times ``ratio``
+    (K11 : K33 at the grid's Nyquist corner, so that it approximates K33⁻¹)."""
+
+    target: float
+    ratio: float
+
+    def __post_init__(self):
+        self.row = BlockSums([self.target])
+
+    def residual(self, g, p):
+        """(reduced residual, working set, whether a cell re-entered, multiplier ω3 [m])
+        of Polonsky-Keer's iteration: the free cells p > 0, and the cells at 0 whose
+        residual points inwards."""
+        free = p > 0
+        lam = float(g[free].mean()) if free.any() else 0.0
+        gr = g - lam
+        released = ~free & (gr < 0)
+        work = free | released
+        if released.any():
+            lam = float(g[work].mean())
+            gr = g - lam
+        return np.where(work, gr, 0.0), work, bool(released.any()), lam
+
+    def direction(self, M, gr, work):
+        """The filtered residual on the working set, Σ over it kept at zero [Pa]."""
+        if not work.any():
+            return np.zeros_like(gr)
+        z = self.ratio * M(gr, 0.0) if M is not None else gr.copy()
+        z *= work
+        z -= z.sum() / np.count_nonzero(work)
+        z *= work
+        return z
+
+    def restore(self, p):
+        """p clipped at 0 and Σp restored by a clipped shift of the cells in contact."""
+        p = np.maximum(p, 0.0)
+        zero, inf = np.zeros_like(p), np.full_like(p, np.inf)
+        return self.row.restore(p[None], zero[None], inf[None], (p > 0)[None])[0]
+
+
+def magnitude(v):
+    """|v| per cell of a vector field v (2, N1, N2), as sqrt(v1² + v2²): a third of
+    ``np.hypot``'s time, which guards against overflow that shear in Pa never reaches (the
+    CG takes three magnitudes per iteration) [unit of v]."""
+    m = v[0] * v[0]
+    m += v[1] * v[1]
+    return np.sqrt(m, out=m)
+
+
+def restore_rows(q, rho, con, stick):
+    """Meet the rows again by projecting the stick cells (then, when they cannot carry
+    them, every contact cell) onto their disks and the rows: one shift vector, found by
+    a dual Newton solve (:func:`contactpipe.solver.cg.project_rows`). Under the force rows
+    alone the shift is first had in closed form, uniform over the cells
+    (:meth:`~contactpipe.solver.cg.Constraints.shift`): where it keeps them in their disks
+    it is the projection (the CG restores its rows after nearly every step; the dual
+    Newton solve cost a fifth of a fretting step's time)."""
+    if con.m == 0:
+        return q
+    for cells in (stick, rho > 0):
+        if not cells.any():
+            continue
+        out = con.shift(q, cells, rho)
+        if out is None:
+            out = project_rows(q, con, cells, "disk", rho=rho)
+        tol = 1e-11 * (np.abs(con.target).max(initial=0.0) + rho.sum())
+        if np.abs(con.residual(out)).max() <= tol:
+            return out
+        q = out
+    return q
+
+
+def disk_start(q0, rho, con, tol):
+    """A warm start within the disks (zero off the contact), its cells within :data:`SNAP`
+    x tol of their bound put on it (else a bound raised by rounding turns slip cells into
+    stick cells, which slide back in tens of iterations), the rows met."""
+    movable = rho > 0
+    q, _ = disk_project(np.where(movable, q0, 0.0), rho)
+    mag = magnitude(q)
+    near = movable & (mag >= rho * (1.0 - SNAP * tol)) & (mag > 0)
+    q[:, near] *= rho[near] / mag[near]
+    return restore_rows(q, rho, con, movable & ~near)
+
+
+def curvature(radial, rho, turning):
+    """The circles' curvature |r·q̂|/ρ on turning cells, 0 elsewhere: ``radial`` the
+    residual along q̂, ``rho`` the bound with 1 off the contact.
+
+    A turning cell q = ρ(cos θ, sin θ) has d²f/dθ² = ρ² e_θ·A e_θ − ρ r·q̂: along the
+    tangent its Hessian is the operator's plus this diagonal, which the line search
+    (:func:`curved`) and the filter's shift (:func:`direction`) both take in."""
+    return np.where(turning, np.abs(radial) / rho, 0.0)
+
+
+def curved(t, r, curv) -> float:
+    """tᵀ(A + D) t: the curvature of the objective along the step t (r = A t; the shear is
+    t's last two components), D the circles' curvature on turning cells (:func:`curvature`;
+    t is tangent there).
+
+    The step along a tangent alone, tᵀA t, overshoots where the circle bends away, and a
+    CG whose every set is fixed then converges linearly (a 12-step steel-on-steel fretting
+    at 128² spent 223 FFT pairs a step, solves of 200-285 iterations at about 0.95 per
+    iteration; 56 with this curvature; docs/design-choices.md)."""
+    return float(np.sum(r * t)) + float(np.sum(curv * (t[-2] * t[-2] + t[-1] * t[-1])))
+
+
+def direction(M, gt, curv, qhat, a_self, free, turning):
+    """The preconditioned shear residual z (before the rows are kept) [Pa]: ``gt`` the
+    residual (tangential on turning cells) [m], ``curv`` the circles' curvature [m/Pa]
+    (:func:`curvature`), ``a_self`` the self-influence [m/Pa], all in q units.
+
+    ``M`` None: TangCG's diagonal scaling, relative to a stick cell. Else the operator's
+    ``tangential_preconditioner``: z = S M(S gt, d̄) [Pa], M ≈ (K_t + d̄ I)⁻¹ the
+    (−Δ)^½ filter shifted by d̄ = :data:`CURVATURE_SHIFT` x the turning cells' median
+    circle curvature, S = √((a + d̄)/(a + d_i)) each cell's own diagonal (d_i = 0 on free
+    cells), then cut back to the tangents on turning cells. The curvature outweighs the
+    self-influence 2-10 times on a fretting step's slip annulus, so the unshifted filter
+    (the scalar CG's) is no better than the diagonal; shifted, the iterations fall by a
+    third (docs/design-choices.md)."""
+    if M is None:
+        return np.where(free | turning, gt * (a_self / (a_self + curv)), 0.0)
+    shift = CURVATURE_SHIFT * float(np.median(curv[turning])) if turning.any() else 0.0
+    S = np.where(free | turning, np.sqrt((a_self + shift) / (a_self + curv)), 0.0)
+    z = M(S * gt, shift)
+    z *= S
+    along = qhat[0] * z[0] + qhat[1] * z[1]
+    return np.where(turning, z - along * qhat, z)
+
+
+def _conjugate(t, z, rz, rz_old, gr, qhat, turning):
+    """The next direction from the last one ``t``: its shear (the last two components)
+    transported onto the current tangents of turning cells, conjugated with z
+    (rz = gt·z); or z itself, a new conjugate sequence, where that would not descend."""
+    tr = qhat[0] * t[-2] + qhat[1] * t[-1]
+    moved = t.copy()
+    moved[-2:] = np.where(turning, t[-2:] - tr * qhat, t[-2:])
+    t_new = z + (rz / rz_old) * moved
+    return t_new if float(np.sum(gr * t_new)) > 0.0 else z
+
+
+def _change(x_new, x, scale) -> float:
+    """Σ|x_new − x| over ``scale``, or over Σ|x_new| where ``scale`` is None [1]."""
+    d = float(np.abs(x_new - x).sum())
+    return d / (scale if scale is not None else max(float(np.abs(x_new).sum()), 1e-300))
+
+
+def _step(apply, x, Ax, tau, t, r, rho, con, cells, pressure, scale, lag, pending, tol):
+    """One step x − τ t (r = A t) projected: p clipped at 0 and its row restored; stick
+    cells pushed past their disk projected radially, turning cells put back on their
+    circles, the rows restored. A x follows the step; the projection's correction joins
+    ``pending`` while the corrections summed (``lag``, relative) stay below :data:`LAG` x
+    tol, else its product (with the pending ones) is added.
+    Returns (x, A x, the step's size, lag, pending)."""
+    movable, stick, turning = cells
+    x_new = x - tau * t
+    Ax_new = Ax - tau * r
+    s = x_new[-2:]
+    m = magnitude(s)
+    over = movable & (m > rho)
+    fix = over | (turning & (m > 0))
+    clipped = pressure is not None and bool((x_new[0] < 0).any())
+    if not (clipped or fix.any()):
+        return x_new, Ax_new, _change(x_new, x, scale), lag, pending
+    stepped = x_new.copy()
+    if clipped:
+        x_new[0] = pressure.restore(x_new[0])
+    if fix.any():
+        onto = np.divide(rho, m, out=np.ones_like(m), where=fix)   # 1 where nothing moves
+        x_new[-2:] = restore_rows(s * onto, rho, con, stick & ~over)
+    err = _change(x_new, x, scale)
+    d = x_new - stepped
+    size = _change(x_new, stepped, scale)
+    if size == 0.0:
+        return x_new, Ax_new, err, lag, pending
+    if lag + size <= LAG * tol:
+        return x_new, Ax_new, err, lag + size, d if pending is None else pending + d
+    if pending is not None:
+        d += pending
+    Ax_new += apply(d)
+    return x_new, Ax_new, err, 0.0, None
+
+
+def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
+            pressure: PressureBlock | None = None, scale=None) -> DiskResult:
+    """The projected CG (module notes) from a feasible start.
+
+    Parameters
+    ----------
+    apply : callable
+        x ↦ A x, on x's shape.
+    b : ndarray
+        The linear term, x's shape [m].
+    x : ndarray (2, N1, N2), or (3, N1, N2) with a pressure block first
+        Start: the shear within its disks and on its rows (:func:`disk_start`), the
+        pressure ≥ 0 on its row.
+    Ax : ndarray
+        A x of the start [m].
+    rho : ndarray (N1, N2)
+        The shear's bound, in its unit (μp for q, p_lag for s = q/μ).
+    con : Constraints
+        The shear's rows on (2, N1, N2).
+    tol, max_iter :
+        Relative step size at which it stops; iterations allowed.
+    M : callable, optional
+        The operator's ``tangential_preconditioner`` (in q units); None: diagonal scaling.
+    a_self : float
+        K11's self-influence [m/Pa].
+    unit : float
+        q per unit of the shear variable (μ for s = q/μ, 1 for q) [Pa/unit].
+    pressure : PressureBlock, optional
+        x[0] is the pressure.
+    scale : float, optional
+        The step's size is Σ|Δx| over it; None: over Σ|x| (the stacked joint measure).
+
+    Returns
+    -------
+    DiskResult
+        ``pending`` holds the projection corrections not yet in ``Ax``; the caller adds
+        their product where it needs an exact A x.
+    """
+    movable = rho > 0
+    rho_safe = np.where(movable, rho, 1.0)      # divides where only contact cells count
+    t = np.zeros_like(x)
+    rz_old, sets_old = 1.0, None
+    err, best, best_it = np.inf, np.inf, 0
+    lam = np.zeros(con.m)
+    lag, pending = 0.0, None      # corrections not yet in A x, summed, relative [1]
+    it = 0
+    for it in range(1, max_iter + 1):
+        if it - best_it > STALL:    # no progress: leave it to the caller's fallback
+            break
+        g = Ax + b
+        s = x[-2:]
+        mag = magnitude(s)
+        at_bound = movable & (mag >= rho * (1.0 - 1e-12))
+        stick = movable & ~at_bound
+        if stick.any():
+            lam = con.fit(g[-2:], stick)
+        gr = g - con.field(lam) if pressure is None else g.copy()
+        if pressure is not None:
+            gr[-2:] -= con.field(lam)
+        qhat = np.where(at_bound, s / np.where(mag > 0, mag, 1.0), 0.0)
+        radial = qhat[0] * gr[-2] + qhat[1] * gr[-1]
+        released = at_bound & (radial > 0)
+        turning = at_bound & ~released
+        free = stick | released
+        gt = gr.copy()
+        gt[-2:] = np.where(turning, gr[-2:] - radial * qhat, gr[-2:])
+        curv = curvature(radial, rho_safe, turning)
+        z = np.empty_like(x)
+        z[-2:] = con.keep(direction(M, gt[-2:] / unit, curv / (unit * unit), qhat, a_self,
+                                    free, turning) / unit, free)
+        sets = (free, turning)
+        entered = bool(released.any())
+        if pressure is not None:
+            gr[0], work, back, _ = pressure.residual(g[0], x[0])
+            gt[0] = gr[0]
+            z[0] = pressure.direction(M, gr[0], work)
+            sets, entered = sets + (work,), entered or back
+        rz = float(np.sum(gt * z))
+        if not rz > 0.0:
+            err = 0.0 if rz <= 0.0 else np.inf
+            break
+        reset = (entered or sets_old is None
+                 or not all(np.array_equal(a, c) for a, c in zip(sets, sets_old)))
+        t = z if reset else _conjugate(t, z, rz, rz_old, gr, qhat, turning)
+        rz_old, sets_old = rz, sets
+        r = apply(t)
+        denom = curved(t, r, curv)
+        if denom <= 0.0:
+            err = 0.0
+            break
+        tau = float(np.sum(gr * t)) / denom
+        if turning.any():       # no cell turns by more than half a radian in one step
+            spin = magnitude(t[-2:])
+            spin /= rho_safe
+            spin_max = float(spin.max(where=turning, initial=0.0))
+            if tau * spin_max > 0.5:
+                tau = 0.5 / spin_max
+                sets_old = None
+        x, Ax, err, lag, pending = _step(apply, x, Ax, tau, t, r, rho, con,
+                                         (movable, stick, turning), pressure, scale, lag,
+                                         pending, tol)
+        if not err >= 0.0:      # NaN: the iterate is lost
+            err = np.inf
+            break
+        if err < tol:
+            break
+        if err < 0.5 * best:
+            best, best_it = err, it
+    miss = float(np.abs(con.residual(x[-2:])).max(initial=0.0)) / max(float(rho.sum()),
+                                                                      1e-300)
+    if pressure is not None:
+        miss = max(miss, abs(float(x[0].sum()) - pressure.target) / max(pressure.target,
+                                                                         1e-300))
+    err = max(float(err), miss)
+    ok = bool(err < tol) and bool(np.all(np.isfinite(x)))
+    return DiskResult(x, Ax, pending, it, err, ok)
