@@ -19,10 +19,12 @@ memory         ``recursive`` / ``direct``               a viscoelastic body and 
 =============  ======================================  ===========================================
 
 ``gauss_seidel`` names the coupling sub-model: the normal and tangential problems solved
-together at each instant until both hold. With the one-component form under force control
-of W and T1 and a uniform μ, an instant is solved as one problem over (p, q1) with only the
-bound μp lagged between passes (:mod:`contactpipe.solver.joint`); otherwise by block
-Gauss-Seidel passes. Both reach the same answer within the tolerance.
+together at each instant until both hold. Under force control of W and T alone and a
+uniform μ, an instant is solved as one problem over (p, q1) (one-component form) or
+(p, q1, q2) (vector form) with only the bound μp lagged between passes
+(:mod:`contactpipe.solver.joint`); otherwise, and in the vector form where the contact
+slides as a whole, by block Gauss-Seidel passes. Both reach the same answer within the
+tolerance.
 
 With ``solver.tangential = "auto"`` the one-component form runs whenever the tangential
 load is along x1: it is several times cheaper and exact for the Cattaneo-Mindlin and

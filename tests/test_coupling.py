@@ -152,7 +152,8 @@ def _vector_path(plain, precondition=True):
     ``precondition`` False: the vector CG with TangCG's diagonal scaling alone, every
     pass's A q exact."""
     saved = (coupling_module.follow_bound, disk_cg_module.LAG, disk_cg_module.SNAP,
-             coupling_module.solve_vector)
+             coupling_module.solve_vector, coupling_module._Instant.joint_applies)
+    coupling_module._Instant.joint_applies = lambda self: False     # the passes themselves
     if plain:
         coupling_module.follow_bound = lambda q, old, new: q
         disk_cg_module.LAG = disk_cg_module.SNAP = 0.0
@@ -170,7 +171,7 @@ def _vector_path(plain, precondition=True):
         return out, op.conv.pairs - pairs0
     finally:
         (coupling_module.follow_bound, disk_cg_module.LAG, disk_cg_module.SNAP,
-         coupling_module.solve_vector) = saved
+         coupling_module.solve_vector, coupling_module._Instant.joint_applies) = saved
 
 
 def test_preconditioned_vector_passes_reach_the_diagonally_scaled_instants():

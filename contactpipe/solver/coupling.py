@@ -13,13 +13,16 @@ tolerance); the last passes run at the full tolerance. Warm starts carry their o
 products (A p, A q) from pass to pass. This cuts the FFT pairs of a coupled
 step without changing its converged answer.
 
-The joint solve: a coupled instant of the scalar form under force control of W and T1
-(uniform μ) is solved instead as one bound-constrained problem over (p, q1) with only the
-bound μp lagged between passes (:mod:`contactpipe.solver.joint`; from nothing in contact,
-a normal solve starts it), its shear then put on the final pressure's bound
-(:func:`contactpipe.solver.joint.finish`: Coulomb's law exact as after the passes above,
-without another solve): the same answer within the tolerance, in fewer FFT pairs (paper
-fig. 3 with coupling, 128²: 159 → 69 pairs per step). Where it does not converge the
+The joint solve: a coupled instant under force control of W and T alone (uniform μ) is
+solved instead as one constrained problem over (p, q1) — the scalar form — or (p, q1, q2)
+— the vector form — with only the bound μp lagged between passes
+(:mod:`contactpipe.solver.joint`; from nothing in contact, a normal solve starts it), its
+shear then put on the final pressure's bound (:func:`contactpipe.solver.joint.finish`,
+:func:`~contactpipe.solver.joint.finish_vector`: Coulomb's law exact as after the passes
+above, without another solve): the same answer within the tolerance, in fewer FFT pairs
+(128²: paper fig. 3 with coupling, scalar form, 159 → 69 pairs per step; steel-on-aluminium
+fretting, vector form, 193 → 154).
+Where it does not converge, or in the vector form where no cell sticks any more, the
 block Gauss-Seidel passes take over. ``passes`` then counts the joint passes.
 
 The caller gives the solver limits as one :class:`Tolerances` and what it knows of the
@@ -42,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .cg import Constraints
-from .joint import finish, solve_joint
+from .joint import finish, finish_vector, solve_joint, solve_joint_vector
 from .normal import NormalControl, NormalResult, solve_normal
 from .tangential import follow_bound, force_rows, solve_scalar, solve_vector
 
@@ -280,18 +283,21 @@ class _Instant:
         return inc[1:3].copy(), float(inc[5])
 
     def joint_applies(self) -> bool:
-        """The instant can be solved as one problem over (p, q1) (:mod:`.joint`): a coupled
-        scalar form under force control of W > 0 and T1 alone, with a uniform μ."""
-        return (self.coupled and self.tang == "scalar" and not self.op.rigid
+        """The instant can be solved as one problem over (p, q) (:mod:`.joint`): a coupled
+        instant under force control of W > 0 and T alone (the scalar form: T1), with a
+        uniform μ and |T| within μW."""
+        return (self.coupled and self.tang in ("scalar", "vector") and not self.op.rigid
                 and self.ctl.is_force(0) and self.normal_ctl is None and self.rows is None
                 and np.ndim(self.mu) == 0 and self.W > 0.0
-                and abs(self.T[0]) <= self.mu * self.W)
+                and (float(np.hypot(*self.T)) if self.vector else abs(self.T[0]))
+                <= self.mu * self.W)
 
     def joint(self, tol):
-        """The instant by :func:`.joint.solve_joint`, its shear put on the final pressure's
-        bound by :func:`.joint.finish`; None when the joint solve did not converge (the
+        """The instant by :func:`.joint.solve_joint` (:func:`.joint.solve_joint_vector`),
+        its shear put on the final pressure's bound by :func:`.joint.finish`
+        (:func:`.joint.finish_vector`); None when the joint solve did not converge (the
         block Gauss-Seidel passes then take over from the start)."""
-        prev, U, op = self.prev, self.U, self.op
+        prev, U, op, mu = self.prev, self.U, self.op, self.mu
         p0 = prev.p_guess
         if not np.any(p0 > 0):
             # nothing in contact yet (a preload's first sub-step): the pressure of the
@@ -301,17 +307,27 @@ class _Instant:
             if not n.converged:
                 return None
             p0 = n.p
-        b = np.stack([self.gap + U[2], U[0] - prev.u[0]])
-        j = solve_joint(op, b, self.W, self.T[0], self.cell, self.mu, p0,
-                        prev.q[0], tol, self.lim.max_iter, self.lim.max_passes)
+        lim = self.lim
+        if self.vector:
+            b = np.stack([self.gap + U[2], U[0] - prev.u[0], U[1] - prev.u[1]])
+            j = solve_joint_vector(op, b, self.W, self.T, self.cell, mu, p0, prev.q, tol,
+                                   lim.max_iter, lim.max_passes)
+        else:
+            b = np.stack([self.gap + U[2], U[0] - prev.u[0]])
+            j = solve_joint(op, b, self.W, self.T[0], self.cell, mu, p0, prev.q[0], tol,
+                            lim.max_iter, lim.max_passes)
         self.its += j.iterations
         if not j.converged:
             return None
-        q = np.zeros_like(prev.q)
-        q[0], u_t, domega1 = finish(op, j, self.mu, b[1])
+        if self.vector:
+            q, u_t, domega = finish_vector(op, j, mu, b[1:], self.T, self.cell)
+        else:
+            q = np.zeros_like(prev.q)
+            q[0], u_t, domega1 = finish(op, j, mu, b[1])
+            domega = np.array([domega1, 0.0])
         n = NormalResult(j.p, j.omega3, u_t[2], j.iterations, j.residual, True)
-        return InstantResult(j.p, q, U + u_t, j.omega3, np.array([domega1, 0.0]), self.its,
-                             j.passes, True, j.residual, normal=n, dphi3=0.0)
+        return InstantResult(j.p, q, U + u_t, j.omega3, np.asarray(domega, dtype=float),
+                             self.its, j.passes, True, j.residual, normal=n, dphi3=0.0)
 
     def capacity(self, p, W):
         """The largest |T| the bounds can carry: mu W, or Σ mu p Δ with a mapped mu [N]."""

@@ -1,4 +1,5 @@
-"""One conjugate-gradient solve over (p, q1) for a coupled instant (the scalar form).
+"""One conjugate-gradient solve over (p, q1) for a coupled instant (the scalar form), or
+over (p, q1, q2) (the vector form, :func:`solve_joint_vector`).
 
 Block Gauss-Seidel (:func:`contactpipe.solver.coupling.solve_instant`) lags two things
 from pass to pass: the coupling displacements (u3 from q through K31, u1 from p through
@@ -36,10 +37,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import BlockSums, box_cg
-from .tangential import follow_bound, scalar_multiplier
+from .cg import BlockSums, box_cg, disk_project
+from .disk_cg import PressureBlock, disk_cg, disk_start, restore_rows
+from .tangential import follow_bound, force_rows, multipliers, scalar_multiplier, sliding
 
-__all__ = ["JointResult", "finish", "solve_joint"]
+__all__ = ["JointResult", "finish", "finish_vector", "solve_joint", "solve_joint_vector"]
 
 #: Loosest inner tolerance, that of the first pass [1] (never below the caller's): the
 #: first pass answers the new load and the moved bound at once, and its pressure change
@@ -60,14 +62,32 @@ DEFER = 0.1
 @dataclass
 class JointResult:
     p: np.ndarray           # (N1, N2) pressure [Pa]
-    q1: np.ndarray          # (N1, N2) shear [Pa], within the bound of the last pass
+    q: np.ndarray           # shear [Pa] within the bound of the last pass: (N1, N2) q1
+                            # of the scalar form, (2, N1, N2) q of the vector form
     bound: np.ndarray       # (N1, N2) that bound, μ p of the pass before [Pa]
     omega3: float           # normal approach [m] (the p row's multiplier)
-    Ax: np.ndarray          # (2, N1, N2) (K33 p + K31 q1, K13 p + K11 q1) [m]
+    Ax: np.ndarray          # (u3, u1) = (K33 p + K31 q1, K13 p + K11 q1) [m], or
+                            # (u3, u1, u2) from (p, q) for the vector form
     iterations: int
     passes: int
     converged: bool
     residual: float         # the failing solve's residual, or the last pressure change
+
+
+def _next_inner(inner, change, tol):
+    """The next pass's inner tolerance: a fraction of the last pressure change, never
+    looser than this pass's nor tighter than the full one; near the end the full one, so
+    that the pass may be the last."""
+    inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
+    return tol if inner < FULL_WITHIN * tol else inner
+
+
+def _settled(last, change, change_old, tol) -> bool:
+    """A pass at the full tolerance (``last``) moved p by less than it, or by so little
+    that the next one, at the contraction just measured, would: the lag of the bound is
+    then below the tolerance."""
+    return last and (change < tol or (0.0 < change_old < np.inf
+                                      and change * min(1.0, change / change_old) < tol))
 
 
 def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
@@ -149,15 +169,9 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         change = float(np.abs(res.x[0] - p).sum()) * cell_area / max(W, 1e-300)
         p, s, Ax = res.x[0], res.x[1], res.Ax
         last = inner == tol
-        inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
-        if inner < FULL_WITHIN * tol:       # near the end: this pass may be the last
-            inner = tol
+        inner = _next_inner(inner, change, tol)
         lag_old = lag
-        # settled: a pass at the full tolerance moved p by less than it, or by so little
-        # that the next one, at the contraction just measured, would (the lag of the
-        # bound is then below the tolerance)
-        if last and (change < tol or (0.0 < change_old < np.inf
-                                      and change * min(1.0, change / change_old) < tol)):
+        if _settled(last, change, change_old, tol):
             omega3 = float(res.multiplier[0])
             if pending is not None:               # the product made exact at the end
                 Ax = Ax + apply(pending)
@@ -200,8 +214,8 @@ def finish(op, j: JointResult, mu, b1):
     """
     k = op.k
     bound = mu * j.p
-    q1 = np.clip(follow_bound(j.q1, j.bound, bound), -bound, bound)
-    dq = q1 - j.q1
+    q1 = np.clip(follow_bound(j.q, j.bound, bound), -bound, bound)
+    dq = q1 - j.q
     u = np.empty((3,) + q1.shape)
     if dq.any():
         d = op.conv.convolve_matrix([[k["11"], None, None], [None, k["21"], k["23"]],
@@ -213,3 +227,148 @@ def finish(op, j: JointResult, mu, b1):
         u[0], u[2] = j.Ax[1], j.Ax[0]
         u[1] = op.conv.convolve_matrix([[k["21"], k["23"]]], [q1, j.p])[0]
     return q1, u, scalar_multiplier(u[0] + b1, q1, bound)
+
+
+def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
+                       max_passes) -> JointResult:
+    """The coupled instant of the vector form under force control of W and T (uniform μ):
+    one problem over x = (p, s1, s2), s = q/μ, with the bound |s| ≤ p_lag held per pass,
+
+        minimise  ½ xᵀ A x + bᵀ x,   A = [[K33, μK31, μK32], [μK13, μ²K11, μ²K12],
+                                          [μK23, μ²K21, μ²K22]],
+        subject to  p ≥ 0,  |s| ≤ p_lag per cell,  Σp = W/Δ,  Σs = T/(μΔ),
+
+    by the projected CG of :func:`contactpipe.solver.disk_cg.disk_cg` with its pressure
+    block: one operator application is three FFT pairs (three forward transforms, nine
+    kernel products, three inverse), the filters three quarters of one. The passes, their
+    inexact schedule and their end are :func:`solve_joint`'s; a pass's start moves the
+    slip cells onto their moved bound and updates A x by the start's change (a zero
+    pressure change costs no forward transform).
+
+    Parameters
+    ----------
+    op : ContactOperator
+        Operator of the instant; not rigid.
+    b : ndarray (3, N1, N2)
+        hi + U3, and U1 − u1(k−1), U2 − u2(k−1) [m].
+    W : float
+        Normal force [N], > 0.
+    T : array_like (2,)
+        Tangential force [N], |T| ≤ μW.
+    cell_area, mu :
+        [m²], uniform friction coefficient [1].
+    p0, q0 : ndarray
+        Warm starts [Pa]: pressure (N1, N2), in contact somewhere; shear (2, N1, N2).
+    tol, max_iter, max_passes :
+        As in :class:`contactpipe.solver.coupling.Tolerances`.
+
+    Returns
+    -------
+    JointResult
+        ``q`` (2, N1, N2), ``Ax`` (u3, u1, u2) [m]; ``converged`` False when a pass stopped
+        or the passes did not settle.
+    """
+    k, conv = op.k, op.conv
+    blocks = [[k["33"], mu * k["31"], mu * k["32"]],
+              [mu * k["13"], mu * mu * k["11"], mu * mu * k["12"]],
+              [mu * k["23"], mu * mu * k["21"], mu * mu * k["22"]]]
+    shape = (3,) + p0.shape
+
+    def apply(x):                 # a zero block (a start's update) costs no transform
+        return conv.convolve_matrix(blocks, [f if f.any() else None for f in x],
+                                    out=np.empty(shape))
+
+    M = op.tangential_preconditioner()
+    c11, c33 = (float(np.real(k[c][conv.n1, conv.n2])) for c in ("11", "33"))
+    pressure = PressureBlock(W / cell_area, c11 / c33 if c11 > 0.0 and c33 > 0.0 else 1.0)
+    con = force_rows(p0.shape, np.asarray(T, dtype=float) / mu, cell_area)
+    a_self = op.self_influence("11")
+    b = np.stack([b[0], mu * b[1], mu * b[2]])
+    p = np.maximum(np.asarray(p0, dtype=float), 0.0)
+    p *= pressure.target / p.sum()
+    s = np.asarray(q0, dtype=float) / mu
+    lag_old, Ax, pending, its, change = None, None, None, 0, np.inf
+    inner = max(tol, FIRST_PASS_TOLERANCE)
+    for passes in range(1, max_passes + 1):
+        lag = p                                   # the bound of s: |s| <= p (lagged)
+        before = np.concatenate([p[None], s])
+        if lag_old is not None:                   # slip cells stay on their moved bound
+            s = follow_bound(s, lag_old, lag)
+        x = np.concatenate([p[None], disk_start(s, lag, con, inner)])
+        if Ax is None:
+            Ax = apply(x)
+        else:
+            d = x - before
+            if pending is not None:
+                d += pending
+            if d.any():
+                Ax = Ax + apply(d)
+        res = disk_cg(apply, b, x, Ax, lag, con, inner, max_iter, M, a_self, unit=mu,
+                      pressure=pressure)
+        pending = res.pending
+        its += res.iterations
+        if not res.converged:
+            return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
+                               res.residual)
+        change_old = change
+        change = float(np.abs(res.x[0] - p).sum()) * cell_area / max(W, 1e-300)
+        p, s, Ax = res.x[0], res.x[1:], res.Ax
+        if sliding(s, lag):
+            # no cell sticks: the projected CG stalls on the turning circles (a 32²
+            # instant at |T| = 0.98 μW took 17 passes, 652 iterations); the passes'
+            # vector solves have the projected gradient for it
+            return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, passes, False, change)
+        last = inner == tol
+        inner = _next_inner(inner, change, tol)
+        lag_old = lag
+        if _settled(last, change, change_old, tol):
+            if pending is not None:               # the product made exact at the end
+                Ax = Ax + apply(pending)
+            omega3 = pressure.residual(Ax[0] + b[0], p)[3]
+            Ax = np.stack([Ax[0], Ax[1] / mu, Ax[2] / mu])       # (u3, u1, u2)
+            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True, change)
+    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False, change)
+
+
+def finish_vector(op, j: JointResult, mu, b12, T, cell_area):
+    """The vector joint solution on the bound of its own final pressure, without another
+    solve (as :func:`finish`): the slip cells follow the bound, a cell beyond it is
+    projected back onto its disk, and the force rows are met again by a shift of the
+    stick cells (:func:`contactpipe.solver.disk_cg.restore_rows`).
+
+    Parameters
+    ----------
+    op : ContactOperator
+    j : JointResult
+        A converged :func:`solve_joint_vector`.
+    mu : float
+        [1]
+    b12 : ndarray (2, N1, N2)
+        U − u(k−1) in the plane [m].
+    T : array_like (2,)
+        Tangential force [N].
+    cell_area : float
+        [m²]
+
+    Returns
+    -------
+    q : ndarray (2, N1, N2)
+        The shear [Pa], |q| <= μ p with the slip cells on the bound.
+    u : ndarray (3, N1, N2)
+        (u1, u2, u3) from the tractions [m]: the kept products mended for the change of q
+        (one block product of it, 2.5 FFT pairs, where it moved).
+    domega : ndarray (2,)
+        The rigid shift increment Δω [m], the force rows' multipliers.
+    """
+    bound = mu * j.p
+    q, _ = disk_project(np.where(bound > 0, follow_bound(j.q, j.bound, bound), 0.0), bound)
+    con = force_rows(bound.shape, T, cell_area)
+    mag = np.hypot(q[0], q[1])
+    q = restore_rows(q, bound, con, (bound > 0) & (mag < bound * (1.0 - 1e-12)))
+    dq = q - j.q
+    u = np.stack([j.Ax[1], j.Ax[2], j.Ax[0]])
+    if dq.any():
+        k = op.k
+        u += op.conv.convolve_matrix([[k["11"], k["12"]], [k["21"], k["22"]],
+                                      [k["31"], k["32"]]], [dq[0], dq[1]])
+    return q, u, multipliers(con, u[:2] + b12, q, bound)

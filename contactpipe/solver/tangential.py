@@ -45,7 +45,7 @@ from .cg import (ComponentSums, Constraints, box_cg, disk_project, fista, projec
 from .disk_cg import disk_cg, disk_start
 
 __all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "disk_project",
-           "project_disks_sum", "force_rows", "slip_multipliers"]
+           "project_disks_sum", "force_rows", "sliding", "slip_multipliers"]
 
 
 @dataclass
@@ -272,6 +272,15 @@ def _pinned(stick, mag, bound) -> bool:
     return bool(np.any(stick & (mag < bound * (1.0 - DEEP_STICK))))
 
 
+def sliding(q, bound) -> bool:
+    """No cell of the shear q (2, N1, N2) [Pa] sticks clearly inside its bound μp [Pa]
+    while some are in contact: the contact slides (nearly) as a whole, where the vector
+    CG stalls and the projected gradient converges (:func:`_cg_with_fallback`)."""
+    mag = np.hypot(q[0], q[1])
+    stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
+    return bool((bound > 0).any()) and not _pinned(stick, mag, bound)
+
+
 #: Passes of the active-set fit of :func:`slip_multipliers`.
 SLIP_FIT_PASSES = 20
 
@@ -384,12 +393,8 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
             x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
         return x, Ax, its, err, ok and not _infeasible(x, con, None, scale, tol_)
 
-    def sliding(q):
-        mag = np.hypot(q[0], q[1])
-        stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
-        return (bound > 0).any() and not _pinned(stick, mag, bound)
-
-    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter, sliding)
+    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter,
+                                            lambda q: sliding(q, bound))
     lam = multipliers(con, Aq + b, q, bound)
     if rows is not None:
         return TangentialResult(q=q, domega=np.zeros(2), Aq=Aq, iterations=its,
