@@ -55,6 +55,19 @@ def assert_same(a, b, p_tol, q_tol):
     assert np.abs(wa - wb).max() <= q_tol * np.abs(wa).max()
 
 
+def _watch(monkeypatch, name):
+    """The results of the coupling module's joint solve ``name`` (``solve_joint`` or
+    ``solve_joint_vector``), one per call, in a list."""
+    seen, real = [], getattr(joint, name)
+
+    def watched(*a, **k):
+        seen.append(real(*a, **k))
+        return seen[-1]
+
+    monkeypatch.setattr(coupling, name, watched)
+    return seen
+
+
 @pytest.mark.parametrize("build", [steel_on_aluminium, rigid_on_maxwell],
                          ids=["steel-on-aluminium", "rigid-on-maxwell"])
 def test_joint_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
@@ -63,14 +76,7 @@ def test_joint_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
     Gauss-Seidel passes' within 1e-7 of p0 and μp0 (measured 8.2e-11 / 1.9e-9 steel on
     aluminium, 5.2e-11 / 5.5e-10 rigid on Maxwell; the joint shear is put on the final
     bound by :func:`joint.finish`, without the tangential solve that ends the passes)."""
-    calls = []
-    real = joint.solve_joint
-
-    def counted(*a, **k):
-        calls.append(1)
-        return real(*a, **k)
-
-    monkeypatch.setattr(coupling, "solve_joint", counted)
+    calls = _watch(monkeypatch, "solve_joint")
     fast = cp.simulate(build())
     assert len(calls) >= fast.sizes["time"] + fast.attrs["preload_substeps"] - 1
     monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
@@ -107,14 +113,7 @@ def test_joint_vector_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
     within 1e-7 of p0 and μp0, ω1 within 1e-7 of its largest (measured 1.3e-10 / 6.9e-10 /
     1.3e-11 steel on aluminium, 1.5e-10 / 2.0e-9 / 4.7e-11 rigid on Maxwell), the same
     stick/slip status."""
-    calls = []
-    real = joint.solve_joint_vector
-
-    def counted(*a, **k):
-        calls.append(1)
-        return real(*a, **k)
-
-    monkeypatch.setattr(coupling, "solve_joint_vector", counted)
+    calls = _watch(monkeypatch, "solve_joint_vector")
     fast = cp.simulate(build(), tangential="vector")
     assert len(calls) >= fast.sizes["time"] + fast.attrs["preload_substeps"] - 1
     monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
@@ -161,24 +160,12 @@ def _oblique_load(fraction):
                       time={"steps": 2}, solver={"tolerance": TOL})
 
 
-def _watch_joint_vector(monkeypatch):
-    """The results of the joint vector solves, in a list."""
-    seen, real = [], joint.solve_joint_vector
-
-    def watched(*a, **k):
-        seen.append(real(*a, **k))
-        return seen[-1]
-
-    monkeypatch.setattr(coupling, "solve_joint_vector", watched)
-    return seen
-
-
 def test_joint_vector_solve_near_gross_slip(monkeypatch):
     """T = 0.95 μW at 30° to x1 (steel on aluminium, vector form, 32²): 21 of 565 contact
     cells still stick, the slip's direction turns across the contact; the joint solve
     converges on its own, and its fields are the Gauss-Seidel passes' within 1e-7 of p0
     and μp0 (measured 1.7e-10 / 9.3e-10)."""
-    seen = _watch_joint_vector(monkeypatch)
+    seen = _watch(monkeypatch, "solve_joint_vector")
     fast = cp.simulate(_oblique_load(0.95), tangential="vector")
     assert all(res.converged for res in seen)
     status = fast.status.values[-1]
@@ -199,7 +186,7 @@ def test_joint_vector_solve_hands_gross_slip_to_the_passes(monkeypatch):
     a pass that leaves no cell sticking hands the instant to the Gauss-Seidel passes,
     whose vector solves have the projected gradient: after one pass, and the instant
     solved, every cell on its bound (to 1e-12 of μp0) and Σq Δ = T."""
-    seen = _watch_joint_vector(monkeypatch)
+    seen = _watch(monkeypatch, "solve_joint_vector")
     ds = cp.simulate(_oblique_load(0.98), tangential="vector")
     assert not seen[-1].converged and seen[-1].passes == 1
     p, q1, q2 = (ds[c].values[-1] for c in ("p", "q1", "q2"))

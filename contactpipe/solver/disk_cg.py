@@ -219,9 +219,8 @@ def _conjugate(t, z, rz, rz_old, gr, qhat, turning):
 
 
 def _change(x_new, x, scale) -> float:
-    """Σ|x_new − x| over ``scale``, or over Σ|x_new| where ``scale`` is None [1]."""
-    d = float(np.abs(x_new - x).sum())
-    return d / (scale if scale is not None else max(float(np.abs(x_new).sum()), 1e-300))
+    """Σ|x_new − x| over ``scale`` [1]."""
+    return float(np.abs(x_new - x).sum()) / scale
 
 
 def _step(apply, x, Ax, tau, t, r, rho, con, cells, pressure, scale, lag, pending, tol):
@@ -239,17 +238,20 @@ def _step(apply, x, Ax, tau, t, r, rho, con, cells, pressure, scale, lag, pendin
     over = movable & (m > rho)
     fix = over | (turning & (m > 0))
     clipped = pressure is not None and bool((x_new[0] < 0).any())
-    if not (clipped or fix.any()):
-        return x_new, Ax_new, _change(x_new, x, scale), lag, pending
-    stepped = x_new.copy()
+    projected = clipped or bool(fix.any())
+    stepped = x_new.copy() if projected else x_new
     if clipped:
         x_new[0] = pressure.restore(x_new[0])
     if fix.any():
         onto = np.divide(rho, m, out=np.ones_like(m), where=fix)   # 1 where nothing moves
         x_new[-2:] = restore_rows(s * onto, rho, con, stick & ~over)
+    if scale is None:               # the stacked measure, over the projected iterate
+        scale = max(float(np.abs(x_new).sum()), 1e-300)
     err = _change(x_new, x, scale)
+    if not projected:
+        return x_new, Ax_new, err, lag, pending
     d = x_new - stepped
-    size = _change(x_new, stepped, scale)
+    size = float(np.abs(d).sum()) / scale
     if size == 0.0:
         return x_new, Ax_new, err, lag, pending
     if lag + size <= LAG * tol:
@@ -316,9 +318,8 @@ def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1
         stick = movable & ~at_bound
         if stick.any():
             lam = con.fit(g[-2:], stick)
-        gr = g - con.field(lam) if pressure is None else g.copy()
-        if pressure is not None:
-            gr[-2:] -= con.field(lam)
+        gr = g.copy()
+        gr[-2:] -= con.field(lam)
         qhat = np.where(at_bound, s / np.where(mag > 0, mag, 1.0), 0.0)
         radial = qhat[0] * gr[-2] + qhat[1] * gr[-1]
         released = at_bound & (radial > 0)

@@ -74,20 +74,28 @@ class JointResult:
     residual: float         # the failing solve's residual, or the last pressure change
 
 
-def _next_inner(inner, change, tol):
-    """The next pass's inner tolerance: a fraction of the last pressure change, never
-    looser than this pass's nor tighter than the full one; near the end the full one, so
-    that the pass may be the last."""
-    inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
-    return tol if inner < FULL_WITHIN * tol else inner
+class _Schedule:
+    """The joint passes' inexact schedule and their end, for both forms.
 
+    ``inner`` is the next pass's inner tolerance: the first pass's at first, then a
+    fraction of the last pressure change, never looser than the pass before nor tighter
+    than the full one, and the full one once within :data:`FULL_WITHIN` of it, so that the
+    pass may be the last. ``change`` is the last pass's Σ|Δp| Δ / W [1]."""
 
-def _settled(last, change, change_old, tol) -> bool:
-    """A pass at the full tolerance (``last``) moved p by less than it, or by so little
-    that the next one, at the contraction just measured, would: the lag of the bound is
-    then below the tolerance."""
-    return last and (change < tol or (0.0 < change_old < np.inf
-                                      and change * min(1.0, change / change_old) < tol))
+    def __init__(self, tol):
+        self.tol, self.inner, self.change = tol, max(tol, FIRST_PASS_TOLERANCE), np.inf
+
+    def settled(self, p_new, p, W, cell_area) -> bool:
+        """Record a converged pass that moved p to ``p_new`` [Pa]; True when the passes
+        end: a pass at the full tolerance moved p by less than it, or by so little that
+        the next one, at the contraction just measured, would (the lag of the bound is
+        then below the tolerance)."""
+        tol, last, old = self.tol, self.inner == self.tol, self.change
+        self.change = change = float(np.abs(p_new - p).sum()) * cell_area / max(W, 1e-300)
+        inner = min(self.inner, max(tol, PASS_TOLERANCE_FRACTION * change))
+        self.inner = tol if inner < FULL_WITHIN * tol else inner
+        return last and (change < tol or (0.0 < old < np.inf
+                                          and change * min(1.0, change / old) < tol))
 
 
 def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
@@ -141,9 +149,8 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     rows = BlockSums([W / cell_area, T1 / cell_area / mu])
     zero, inf = np.zeros_like(p0), np.full_like(p0, np.inf)
     p, s = np.array(p0, dtype=float), np.array(q0, dtype=float) / mu
-    lag_old, Ax, its, change = None, None, 0, np.inf
+    lag_old, Ax, its, plan = None, None, 0, _Schedule(tol)
     pending = None          # the last pass's projections not yet in its A x
-    inner = max(tol, FIRST_PASS_TOLERANCE)
     for passes in range(1, max_passes + 1):
         lag = p                                   # the bound of s: |s| <= p (lagged)
         lo, hi = np.stack([zero, -lag]), np.stack([inf, lag])
@@ -157,7 +164,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                 Ax_of, s = np.stack([p, s]), moved
                 if pending is not None:
                     Ax_of -= pending
-        res = box_cg(apply, b, lo, hi, rows, np.stack([p, s]), tol=inner,
+        res = box_cg(apply, b, lo, hi, rows, np.stack([p, s]), tol=plan.inner,
                      max_iter=max_iter, restore="shift", Ax0=Ax, precondition=precondition,
                      Ax0_of=Ax_of, update=True, defer=DEFER)
         pending = res.pending
@@ -165,20 +172,19 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
                                res.residual)
-        change_old = change
-        change = float(np.abs(res.x[0] - p).sum()) * cell_area / max(W, 1e-300)
+        settled = plan.settled(res.x[0], p, W, cell_area)
         p, s, Ax = res.x[0], res.x[1], res.Ax
-        last = inner == tol
-        inner = _next_inner(inner, change, tol)
         lag_old = lag
-        if _settled(last, change, change_old, tol):
+        if settled:
             omega3 = float(res.multiplier[0])
             if pending is not None:               # the product made exact at the end
                 Ax = Ax + apply(pending)
                 omega3 = float(rows.fit(Ax + b, (res.x > lo) & (res.x < hi))[0])
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
-            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True, change)
-    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False, change)
+            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True,
+                               plan.change)
+    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False,
+                       plan.change)
 
 
 def finish(op, j: JointResult, mu, b1):
@@ -241,7 +247,7 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     by the projected CG of :func:`contactpipe.solver.disk_cg.disk_cg` with its pressure
     block: one operator application is three FFT pairs (three forward transforms, nine
     kernel products, three inverse), the filters three quarters of one. The passes, their
-    inexact schedule and their end are :func:`solve_joint`'s; a pass's start moves the
+    inexact schedule and their end are :func:`solve_joint`'s (:class:`_Schedule`); a pass's start moves the
     slip cells onto their moved bound and updates A x by the start's change (a zero
     pressure change costs no forward transform).
 
@@ -287,14 +293,13 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     p = np.maximum(np.asarray(p0, dtype=float), 0.0)
     p *= pressure.target / p.sum()
     s = np.asarray(q0, dtype=float) / mu
-    lag_old, Ax, pending, its, change = None, None, None, 0, np.inf
-    inner = max(tol, FIRST_PASS_TOLERANCE)
+    lag_old, Ax, pending, its, plan = None, None, None, 0, _Schedule(tol)
     for passes in range(1, max_passes + 1):
         lag = p                                   # the bound of s: |s| <= p (lagged)
         before = np.concatenate([p[None], s])
         if lag_old is not None:                   # slip cells stay on their moved bound
             s = follow_bound(s, lag_old, lag)
-        x = np.concatenate([p[None], disk_start(s, lag, con, inner)])
+        x = np.concatenate([p[None], disk_start(s, lag, con, plan.inner)])
         if Ax is None:
             Ax = apply(x)
         else:
@@ -303,31 +308,31 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
                 d += pending
             if d.any():
                 Ax = Ax + apply(d)
-        res = disk_cg(apply, b, x, Ax, lag, con, inner, max_iter, M, a_self, unit=mu,
+        res = disk_cg(apply, b, x, Ax, lag, con, plan.inner, max_iter, M, a_self, unit=mu,
                       pressure=pressure)
         pending = res.pending
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
                                res.residual)
-        change_old = change
-        change = float(np.abs(res.x[0] - p).sum()) * cell_area / max(W, 1e-300)
+        settled = plan.settled(res.x[0], p, W, cell_area)
         p, s, Ax = res.x[0], res.x[1:], res.Ax
         if sliding(s, lag):
             # no cell sticks: the projected CG stalls on the turning circles (a 32²
             # instant at |T| = 0.98 μW took 17 passes, 652 iterations); the passes'
             # vector solves have the projected gradient for it
-            return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, passes, False, change)
-        last = inner == tol
-        inner = _next_inner(inner, change, tol)
+            return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, passes, False,
+                               plan.change)
         lag_old = lag
-        if _settled(last, change, change_old, tol):
+        if settled:
             if pending is not None:               # the product made exact at the end
                 Ax = Ax + apply(pending)
             omega3 = pressure.residual(Ax[0] + b[0], p)[3]
             Ax = np.stack([Ax[0], Ax[1] / mu, Ax[2] / mu])       # (u3, u1, u2)
-            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True, change)
-    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False, change)
+            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True,
+                               plan.change)
+    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False,
+                       plan.change)
 
 
 def finish_vector(op, j: JointResult, mu, b12, T, cell_area):
