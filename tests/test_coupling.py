@@ -212,6 +212,32 @@ def test_the_circles_curvature_in_the_line_search_reaches_coarse_vector_steps_so
     assert fast.iterations.values[1:].sum() < 0.8 * slow.iterations.values[1:].sum()
 
 
+def test_the_filter_shifted_along_the_slip_tangents_reaches_vector_steps_sooner(
+        monkeypatch):
+    """The vector CG's filter shifted by the circles' curvature along the turning cells'
+    tangents only (under fretting along x1: on x2, not x1; :func:`disk_cg.slip_axes`)
+    reaches the same instants as the filter shifted alike on both components (steel on
+    steel fretting, 32², 10 steps): p within 1e-7 max p, q within 1e-7 mu max p, the same
+    stick/slip status (measured 0, 1.0e-9 and no cell), in fewer iterations (measured 152
+    against 170 after the first instant; 64² steel on aluminium, 40 steps: 101.5 against
+    107.4 FFT pairs a step)."""
+    def run():
+        return cp.simulate(fretting_scene(n=32, steps=10), tangential="vector")
+    fast = run()
+    monkeypatch.setattr(disk_cg_module, "slip_axes", lambda qhat, turning: (np.eye(2),
+                                                                             np.ones(2)))
+    slow = run()
+    scale = float(slow.p.max())
+    print(float(np.abs(fast.p - slow.p).max()) / scale,
+          max(float(np.abs(fast[n] - slow[n]).max()) for n in ("q1", "q2")) / (MU * scale),
+          fast.iterations.values[1:].sum(), slow.iterations.values[1:].sum())
+    assert float(np.abs(fast.p - slow.p).max()) <= 1e-7 * scale
+    for name in ("q1", "q2"):
+        assert float(np.abs(fast[name] - slow[name]).max()) <= 1e-7 * MU * scale
+    assert int((fast.status != slow.status).sum()) == 0
+    assert fast.iterations.values[1:].sum() < 0.95 * slow.iterations.values[1:].sum()
+
+
 def test_vector_warm_starts_reach_the_plain_instants():
     """The vector form's cheaper passes (slip cells kept on their moved bound, A q lagged
     by at most a tenth of the tolerance) reach the instants of the plain passes: p within

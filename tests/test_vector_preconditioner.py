@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from contactpipe.materials import Body
+from contactpipe.solver.disk_cg import direction, slip_axes
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
 
 N1, N2 = 32, 24
@@ -61,3 +62,100 @@ def test_large_shift_tends_to_the_diagonal(op):
     d = 1e6 * lam / float(sigma.min())
     v = np.random.default_rng(5).standard_normal((2, N1, N2))
     np.testing.assert_allclose(M(v, d) * d, v, rtol=0, atol=1e-5 * np.abs(v).max())
+
+
+def test_one_shift_per_field(op):
+    """M(v, (d1, d2)) filters each stacked field by its own shift: equal, to 1e-14 of the
+    largest value, to the fields filtered one at a time."""
+    M = op.tangential_preconditioner()
+    a = op.self_influence("11")
+    v = np.random.default_rng(6).standard_normal((2, N1, N2))
+    both = M(v, np.array([0.0, 3.0 * a]))
+    one = np.stack([M(v[0], 0.0), M(v[1], 3.0 * a)])
+    np.testing.assert_allclose(both, one, rtol=0, atol=1e-14 * np.abs(one).max())
+
+
+def _unit(angle):
+    return np.stack([np.cos(angle), np.sin(angle)])
+
+
+@pytest.mark.parametrize("degrees", [0.0, 30.0, 90.0])
+def test_slip_axes_of_one_slip_direction(degrees):
+    """Cells slipping along ±(cos θ, sin θ) turn across it: the axis carrying the whole
+    share (to 1e-12) is the tangent (−sin θ, cos θ), the other carries none."""
+    rng = np.random.default_rng(7)
+    sign = np.where(rng.random((N1, N2)) < 0.5, -1.0, 1.0)
+    qhat = sign * _unit(np.radians(degrees) * np.ones((N1, N2)))
+    turning = rng.random((N1, N2)) < 0.6
+    axes, share = slip_axes(qhat, turning)
+    np.testing.assert_allclose(axes @ axes.T, np.eye(2), atol=1e-12)
+    big = int(np.argmax(share))
+    assert share[big] == pytest.approx(1.0, abs=1e-12)
+    assert share[1 - big] == pytest.approx(0.0, abs=1e-12)
+    tangent = _unit(np.radians(degrees + 90.0))
+    assert abs(float(axes[big] @ tangent)) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_slip_axes_of_spread_directions():
+    """Directions spread evenly round the circle (a rotating load) share the two axes
+    equally: (½, ½) to 1e-12."""
+    angle = np.linspace(0.0, 2.0 * np.pi, N1 * N2, endpoint=False).reshape(N1, N2)
+    _, share = slip_axes(_unit(angle), np.ones((N1, N2), dtype=bool))
+    np.testing.assert_allclose(share, [0.5, 0.5], atol=1e-12)
+
+
+def _cells(seed):
+    """A working set like a fretting step's (stick core, slip annulus turning along ±x1
+    with a small spread) and positive curvatures on the turning cells [m/Pa]."""
+    rng = np.random.default_rng(seed)
+    i, j = np.meshgrid(np.arange(N1) - N1 / 2, np.arange(N2) - N2 / 2, indexing="ij")
+    r = np.hypot(i / N1, j / N2)
+    free, turning = r < 0.2, (r >= 0.2) & (r < 0.45)
+    sign = np.where(j >= 0, 1.0, -1.0)
+    qhat = np.where(turning, sign * _unit(0.2 * rng.standard_normal((N1, N2))), 0.0)
+    curv = np.where(turning, rng.uniform(0.5, 20.0, (N1, N2)), 0.0)
+    return free, turning, qhat, curv
+
+
+def test_direction_is_the_filter_shifted_along_the_tangents(op):
+    """The vector CG's preconditioner: with the turning cells' axes (x1, x2) and all the
+    tangents' share on x2, z = S_c M(S_c g_c, d̄_c) per component, d̄_1 = 0, d̄_2 =
+    CURVATURE_SHIFT x the median curvature, cut back to the tangents: to 1e-12 of the
+    largest value, against the formula written out."""
+    from contactpipe.solver import disk_cg
+    M = op.tangential_preconditioner()
+    a = op.self_influence("11")
+    free, turning, _, curv = _cells(8)
+    qhat = np.where(turning, np.stack([np.where(np.arange(N2) >= N2 / 2, 1.0, -1.0)
+                                       * np.ones((N1, N2)), np.zeros((N1, N2))]), 0.0)
+    curv = curv * a
+    g = np.random.default_rng(9).standard_normal((2, N1, N2))
+    g[0] = np.where(turning, 0.0, g[0])                 # tangential on turning cells
+    z = direction(M, g, curv, qhat, a, free, turning)
+    d2 = disk_cg.CURVATURE_SHIFT * float(np.median(curv[turning]))
+    act = free | turning
+    S1, S2 = np.sqrt(a / (a + curv)) * act, np.sqrt((a + d2) / (a + curv)) * act
+    expect = np.stack([S1 * M(S1 * g[0], 0.0), S2 * M(S2 * g[1], d2)])
+    expect[0] = np.where(turning, 0.0, expect[0])
+    np.testing.assert_allclose(z, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
+
+
+def test_direction_is_symmetric_positive_semidefinite(op):
+    """On fields tangential on the turning cells and zero off the working set, the
+    direction is a symmetric positive semi-definite map (what preconditioned CG needs):
+    ⟨u, P v⟩ = ⟨P u, v⟩ to 1e-12, ⟨v, P v⟩ ≥ 0."""
+    M = op.tangential_preconditioner()
+    a = op.self_influence("11")
+    free, turning, qhat, curv = _cells(10)
+    curv = curv * a
+    act = free | turning
+    rng = np.random.default_rng(11)
+
+    def tangential(v):
+        along = qhat[0] * v[0] + qhat[1] * v[1]
+        return np.where(turning, v - along * qhat, v) * act
+
+    u, v = (tangential(rng.standard_normal((2, N1, N2))) for _ in range(2))
+    Pu, Pv = (direction(M, w, curv, qhat, a, free, turning) for w in (u, v))
+    assert float(np.sum(u * Pv)) == pytest.approx(float(np.sum(Pu * v)), rel=1e-12)
+    assert float(np.sum(v * Pv)) > 0.0 and float(np.sum(u * Pu)) > 0.0

@@ -243,8 +243,10 @@ class ContactOperator:
         matched to the block's finest mode (the padded K11 spectrum at the grid's
         Nyquist corner, where K11 = K22 and K12 vanishes), and d [m/Pa] ≥ 0 is a uniform
         shift of the diagonal: the curvature of the slip cells' circles in the vector CG
-        (:func:`contactpipe.solver.tangential._vector_cg`), which there outweighs the
-        self-influence 2-10 times and makes the plain (−Δ)^½ filter useless.
+        (:func:`contactpipe.solver.disk_cg.direction`), which there outweighs the
+        self-influence 2-10 times and makes the plain (−Δ)^½ filter useless. ``d`` is one
+        number, or one per stacked field of ``v`` (the CG shifts the component along the
+        turning cells' tangents, not the one across them).
         """
         if "precondition_t" not in self._derived:
             conv = self.conv
@@ -257,6 +259,9 @@ class ContactOperator:
         scale = 1.0 / (self.conv.n1 * self.conv.n2)
 
         def apply(v, d=0.0, out=None):
+            d = np.asarray(d, dtype=float)
+            if d.ndim:                      # one shift per stacked field
+                d = d.reshape(d.shape + (1, 1))
             return self.conv.periodic_filter(sigma * (scale / (lam + d * sigma)), v, out=out)
         return apply
 
