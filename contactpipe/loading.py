@@ -101,6 +101,26 @@ class Programs:
         """(force (6,), motion (6,)) at instant ``k``."""
         return self.force[:, k].copy(), self.motion[:, k].copy()
 
+    def continuation(self, k: int, rtol: float = 1e-9) -> float:
+        """c > 0 where the programs' increment into instant ``k`` is c times the one into
+        k − 1 (every freedom, each relative to its largest value, within ``rtol`` of the
+        increment): the load goes on along a straight path. 0 otherwise: k < 2, a knot's
+        turn, a reversal, or a load held (nothing to go on with) [1]."""
+        if k < 2:
+            return 0.0
+        P = np.nan_to_num(np.concatenate([self.force[:, k - 2:k + 1],
+                                          self.motion[:, k - 2:k + 1]]))
+        size = np.abs(np.nan_to_num(np.concatenate([self.force, self.motion]))).max(axis=1)
+        P /= np.where(size > 0.0, size, 1.0)[:, None]
+        d1, d0 = P[:, 2] - P[:, 1], P[:, 1] - P[:, 0]
+        dd = float(d0 @ d0)
+        if dd == 0.0:
+            return 0.0
+        c = float(d1 @ d0) / dd
+        if c <= 0.0 or np.linalg.norm(d1 - c * d0) > rtol * np.linalg.norm(d1):
+            return 0.0
+        return c
+
     def on(self, tm) -> "Programs":
         """The programs interpolated linearly onto the instants ``tm`` [s]."""
         tm = np.atleast_1d(np.asarray(tm, dtype=float))

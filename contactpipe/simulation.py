@@ -25,10 +25,9 @@ archive writers (:class:`contactpipe.archive.Checkpoint`).
 """
 from __future__ import annotations
 
-import dataclasses
 import time as _time
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
@@ -43,10 +42,10 @@ from .materials import dundurs_beta
 from .nomenclature import variables_for
 from .planning import check_resources, estimate_resources, plan as make_plan
 from .solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
-from .solver.warm_start import self_similar_start
+from .solver.warm_start import continued_start, self_similar_start
 from .solver.window import solve_in_window
 from .solver.memory import BodyMemory, make_memory, resolve_body_rule
-from .solver.normal import NormalResult
+from .solver.state import State
 from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
                               history_displacement, history_kernels)
 
@@ -90,94 +89,6 @@ def _n_steps(scene):
     if scene.time.steps is not None:
         return int(scene.time.steps)
     return len(scene.load.knots()[0]) - 1
-
-
-# --------------------------------------------------------------------------- state
-
-@dataclass
-class State:
-    """The march after its last completed instant: what the next instant starts from.
-
-    Attributes
-    ----------
-    p : ndarray (N1, N2)
-        Pressure [Pa].
-    q : ndarray (2, N1, N2)
-        Shear traction [Pa].
-    u : ndarray (3, N1, N2)
-        Relative surface displacement [m].
-    s : ndarray (2, N1, N2)
-        Accumulated slip [m].
-    omega : ndarray (3,)
-        Rigid-body displacement of body 1 relative to body 2 [m].
-    phi : ndarray (3,)
-        Rigid-body rotation of body 1 relative to body 2 (φ1, φ2, φ3) [rad].
-    dissipation : float
-        Frictional energy dissipated so far [J].
-    memories : list
-        The viscoelastic memory of each body (indenter, half-space), None without one.
-    normal : NormalResult or None
-        The last normal solution (reused while the normal problem does not change).
-    k : int
-        The last completed instant (-1 before the first).
-    """
-
-    p: np.ndarray
-    q: np.ndarray
-    u: np.ndarray
-    s: np.ndarray
-    omega: np.ndarray
-    dissipation: float
-    memories: list
-    normal: NormalResult | None = None
-    k: int = -1
-    phi: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
-
-    @classmethod
-    def initial(cls, shape, memories) -> "State":
-        """The unloaded state on a grid of ``shape`` cells."""
-        n1, n2 = shape
-        return cls(np.zeros((n1, n2)), np.zeros((2, n1, n2)), np.zeros((3, n1, n2)),
-                   np.zeros((2, n1, n2)), np.zeros(3), 0.0, list(memories))
-
-    @property
-    def motion(self) -> np.ndarray:
-        """The six rigid motions reached (ω3, ω1, ω2, φ1, φ2, φ3) [m, rad]."""
-        return np.concatenate([self.omega[[2, 0, 1]], self.phi])
-
-    def arrays(self) -> dict:
-        """The arrays a checkpoint stores (the last normal solution is not kept)."""
-        out = {"p": self.p, "q": self.q, "u": self.u, "s": self.s, "omega": self.omega,
-               "phi": self.phi, "dissipation": np.array(self.dissipation)}
-        for i, m in enumerate(self.memories):
-            if m is not None:
-                out.update({f"mem{i}_{key}": np.asarray(v) for key, v in m.state().items()})
-        return out
-
-    def restore(self, arrays: dict, k: int) -> None:
-        """Take the state a checkpoint stored after instant ``k``.
-
-        Raises
-        ------
-        ValueError, KeyError
-            An array is missing or has the wrong shape.
-        """
-        n1, n2 = self.p.shape
-        shapes = {"p": (n1, n2), "q": (2, n1, n2), "u": (3, n1, n2), "s": (2, n1, n2),
-                  "omega": (3,), "phi": (3,), "dissipation": ()}
-        for key, shape in shapes.items():
-            if np.shape(arrays[key]) != shape:
-                raise ValueError(f"{key} has shape {np.shape(arrays[key])}, expected {shape}")
-        self.p, self.q, self.u, self.s = (np.asarray(arrays[key], dtype=float)
-                                          for key in ("p", "q", "u", "s"))
-        self.omega = np.array(arrays["omega"], dtype=float)
-        self.phi = np.array(arrays["phi"], dtype=float)
-        self.dissipation = float(arrays["dissipation"])
-        for i, m in enumerate(self.memories):
-            if m is not None:
-                m.load_state({key[len(f"mem{i}_"):]: v for key, v in arrays.items()
-                              if key.startswith(f"mem{i}_")})
-        self.normal, self.k = None, int(k)
 
 
 # --------------------------------------------------------------------------- problem
@@ -502,6 +413,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
     same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
                    and _same_normal(pb.program, k) and st.normal is not None)
     iterations, passes, f_last = 0, 0, 0.0
+    q_before, c = st.q, pb.program.continuation(k)
     fractions = pb.fractions(first, _drive(pb.program, k))
     windowed = not first or fractions.size > 1 and pb.similar is not None   # solver.window
     for f in fractions:
@@ -509,6 +421,8 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
         previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None, st.motion)
         if f_last > 0.0 and pb.similar is not None:     # a preload sub-step: its start
             previous = self_similar_start(previous, f / f_last, pb.similar)
+        elif pb.tang:                                   # a straight load path: its start
+            previous = continued_start(previous, st.dq, c)
         f_last = f
         res = (solve_in_window if windowed else solve_instant)(
             op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,
@@ -521,6 +435,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
         _take_motions(pb, st, k, f, res)
     if fractions.size > 1 and pb._trial is None:   # the preload's windows of the contact
         op.drop_windows()                           # (solver.window): the march makes its own
+    st.dq = st.q - q_before
     _check_edges(st.p, k, pb.t[k], pb.scene)
     for m in st.memories:
         if m is not None:

@@ -240,6 +240,37 @@ def test_self_similar_start_of_the_preload(monkeypatch):
     assert np.abs(as_it_was - target).sum() > 0.9 * target.sum()
 
 
+@pytest.mark.parametrize("form", ["scalar", "vector"])
+def test_shear_continued_along_a_straight_load_path(monkeypatch, form):
+    """Steel on aluminium fretting, 32², 20 steps: starting each instant of a straight
+    stretch from q(k−1) + c (q(k−1) − q(k−2)) gives the instants of the plain start q(k−1)
+    within 1e-7 of p0 and μp0 (measured 2.6e-11 / 7.6e-10 scalar, 2.2e-11 / 9.4e-10
+    vector) for fewer FFT pairs after the first instant (measured 1 160 against 1 182
+    scalar, 2 087 against 2 149 vector; at 128² and 40 steps 63.9 against 67.2 and 130.7
+    against 142.7 a step)."""
+    fast = cp.simulate(steel_on_aluminium(), tangential=form)
+    monkeypatch.setattr(simulation, "continued_start", lambda prev, dq, c: prev)
+    slow = cp.simulate(steel_on_aluminium(), tangential=form)
+    assert_same(fast, slow, 1e-7, 1e-7)
+    print(fast.fft_pairs.values[1:].sum(), slow.fft_pairs.values[1:].sum())
+    assert fast.fft_pairs.values[1:].sum() < slow.fft_pairs.values[1:].sum()
+
+
+def test_continued_start_moves_the_shear_alone():
+    """q + c dq where c > 0; the pressure, the displacement and the motions as they were;
+    nothing moved for c = 0 or dq = 0."""
+    from contactpipe.solver.warm_start import continued_start
+    rng = np.random.default_rng(3)
+    prev = Previous(rng.normal(size=(2, 8, 8)), rng.normal(size=(3, 8, 8)),
+                    rng.random((8, 8)), None, np.zeros(6))
+    dq = rng.normal(size=(2, 8, 8))
+    out = continued_start(prev, dq, 0.5)
+    np.testing.assert_array_equal(out.q, prev.q + 0.5 * dq)
+    assert out.u is prev.u and out.p_guess is prev.p_guess and out.motion is prev.motion
+    assert continued_start(prev, dq, 0.0) is prev
+    assert continued_start(prev, np.zeros_like(dq), 1.0) is prev
+
+
 def test_follow_bound_puts_slip_cells_on_the_new_bound():
     """Scalar form: a slip cell lands on ±new exactly (a ratio new/old would round about
     half of them inside, where the CG takes them for stick cells); stick cells stay."""

@@ -295,3 +295,30 @@ def test_old_scenes_keep_their_digest():
     assert set(sc.to_dict()["load"]) == {"time", "normal_force", "tangential_force",
                                          "preload"}
     assert sc.digest() == cp.Scene.from_toml_text(sc.to_toml()).digest()
+
+
+def _programs(tangential, normal=None):
+    from contactpipe.loading import Programs
+    n = len(tangential)
+    force = np.full((6, n), np.nan)
+    motion = np.full((6, n), np.nan)
+    force[0] = 1000.0 if normal is None else normal
+    force[1] = tangential
+    force[2] = 0.0
+    motion[3:] = 0.0
+    return Programs(np.arange(n, dtype=float), force, motion, ("",) * 6)
+
+
+def test_continuation_of_a_straight_load_path():
+    """Programs.continuation(k): the ratio of the increments into k and k − 1 along a
+    straight path (1 for even steps, 2 where the steps double), 0 at a reversal, where
+    the load is held, where another freedom turns, and before the second increment."""
+    even = _programs([0.0, 1.0, 2.0, 3.0, 2.0, 2.0, 2.0])
+    assert [even.continuation(k) for k in range(7)] == pytest.approx(
+        [0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0], abs=1e-12)
+    doubled = _programs([0.0, 1.0, 3.0])
+    assert doubled.continuation(2) == pytest.approx(2.0, rel=1e-12)
+    turned = _programs([0.0, 1.0, 2.0], normal=[1000.0, 1000.0, 1100.0])
+    assert turned.continuation(2) == 0.0
+    together = _programs([0.0, 1.0, 2.0], normal=[1000.0, 1100.0, 1200.0])
+    assert together.continuation(2) == pytest.approx(1.0, rel=1e-12)

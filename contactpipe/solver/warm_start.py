@@ -1,4 +1,14 @@
-"""A self-similar warm start for the sub-steps of a growing load (the frictional preload).
+"""Warm starts: the shear continued along a straight load path, and a self-similar start
+for the sub-steps of a growing load (the frictional preload).
+
+Along a straight stretch of the load path (the increment into instant k is c times the one
+into k − 1, :meth:`contactpipe.loading.Programs.continuation`) the shear moves nearly as
+it did: q(k−1) + c (q(k−1) − q(k−2)) starts the instant closer than q(k−1) does
+(:func:`continued_start`; the pressure is left as it is, a first normal solve being cheaper
+from it). Measured at 128², 40-step fretting: steel on aluminium 67.2 → 63.8 FFT pairs a
+step in the one-component form, 142.7 → 130.7 in the vector form; steel on steel 14.5 →
+14.0 and 41.5 → 39.7 (docs/design-choices.md). At a knot's turn or a reversal it is not
+used: the shear's last increment says nothing of the next one there.
 
 Under a growing normal load on a gap homogeneous of degree d in the distance from its apex
 (a sphere or an ellipsoid: d = 2), the contact grows self-similarly: its size goes as
@@ -20,7 +30,7 @@ from dataclasses import replace
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["self_similar_start"]
+__all__ = ["continued_start", "self_similar_start"]
 
 
 def _stretch(f, lam, centre):
@@ -31,6 +41,31 @@ def _stretch(f, lam, centre):
     return ndimage.map_coordinates(f, [centre[0] + (i - centre[0]) / lam,
                                        centre[1] + (j - centre[1]) / lam],
                                    order=1, mode="constant", cval=0.0)
+
+
+def continued_start(previous, dq, c):
+    """The warm start of an instant that goes on along a straight load path.
+
+    Parameters
+    ----------
+    previous : contactpipe.solver.coupling.Previous
+        What the last instant left.
+    dq : ndarray (2, N1, N2)
+        The last instant's shear increment q(k−1) − q(k−2) [Pa].
+    c : float
+        The ratio of the load's increments (:meth:`Programs.continuation`), 0 where the
+        path turns [1].
+
+    Returns
+    -------
+    Previous
+        ``previous`` with its shear, the start and nothing else (the slip is measured from
+        ``u``), moved on by c dq; unchanged for c = 0. The solves project a start that
+        leaves a friction disk back onto it.
+    """
+    if c <= 0.0 or not np.any(dq):
+        return previous
+    return replace(previous, q=previous.q + c * dq)
 
 
 def self_similar_start(previous, ratio, exponent):
