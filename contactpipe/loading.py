@@ -27,6 +27,7 @@ This module also holds :func:`knot_steps`, the least uniform mesh through the kn
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -101,6 +102,13 @@ class Programs:
         """(force (6,), motion (6,)) at instant ``k``."""
         return self.force[:, k].copy(), self.motion[:, k].copy()
 
+    @functools.cached_property
+    def _sizes(self) -> np.ndarray:
+        """(12, 1): each freedom's largest |force| then |motion| over the instants, 1 where
+        it is 0 or never controlled (the scales of :meth:`continuation`)."""
+        size = np.abs(np.nan_to_num(np.concatenate([self.force, self.motion]))).max(axis=1)
+        return np.where(size > 0.0, size, 1.0)[:, None]
+
     def continuation(self, k: int, rtol: float = 1e-9) -> float:
         """c > 0 where the programs' increment into instant ``k`` is c times the one into
         k − 1 (every freedom, each relative to its largest value, within ``rtol`` of the
@@ -109,9 +117,7 @@ class Programs:
         if k < 2:
             return 0.0
         P = np.nan_to_num(np.concatenate([self.force[:, k - 2:k + 1],
-                                          self.motion[:, k - 2:k + 1]]))
-        size = np.abs(np.nan_to_num(np.concatenate([self.force, self.motion]))).max(axis=1)
-        P /= np.where(size > 0.0, size, 1.0)[:, None]
+                                          self.motion[:, k - 2:k + 1]])) / self._sizes
         d1, d0 = P[:, 2] - P[:, 1], P[:, 1] - P[:, 0]
         dd = float(d0 @ d0)
         if dd == 0.0:

@@ -235,8 +235,8 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     else:
         axes, shift = np.eye(2), np.zeros(2)
     g = np.einsum("ci,i...->c...", axes, gt)
-    S = np.sqrt((a_self + shift[:, None, None]) / (a_self + curv))
-    S *= free | turning
+    S = np.sqrt(np.where(free | turning, 1.0 / (a_self + curv), 0.0))   # one field's root
+    S = np.sqrt(a_self + shift)[:, None, None] * S
     z = M(S * g, shift)
     z *= S
     z = np.einsum("ci,c...->i...", axes, z)
