@@ -413,7 +413,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
     same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
                    and _same_normal(pb.program, k) and st.normal is not None)
     iterations, passes, f_last = 0, 0, 0.0
-    q_before, c = st.q, pb.program.continuation(k)
+    q_before, p_before, c = st.q, st.p, pb.program.continuation(k)
     fractions = pb.fractions(first, _drive(pb.program, k))
     windowed = not first or fractions.size > 1 and pb.similar is not None   # solver.window
     for f in fractions:
@@ -422,7 +422,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
         if f_last > 0.0 and pb.similar is not None:     # a preload sub-step: its start
             previous = self_similar_start(previous, f / f_last, pb.similar)
         elif pb.tang:                                   # a straight load path: its start
-            previous = continued_start(previous, st.dq, c)
+            previous = continued_start(previous, st.dq, c, st.dp)
         f_last = f
         res = (solve_in_window if windowed else solve_instant)(
             op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,
@@ -435,7 +435,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
         _take_motions(pb, st, k, f, res)
     if fractions.size > 1 and pb._trial is None:   # the preload's windows of the contact
         op.drop_windows()                           # (solver.window): the march makes its own
-    st.dq = st.q - q_before
+    st.dq, st.dp = st.q - q_before, st.p - p_before
     _check_edges(st.p, k, pb.t[k], pb.scene)
     for m in st.memories:
         if m is not None:

@@ -241,34 +241,40 @@ def test_self_similar_start_of_the_preload(monkeypatch):
 
 
 @pytest.mark.parametrize("form", ["scalar", "vector"])
-def test_shear_continued_along_a_straight_load_path(monkeypatch, form):
+def test_tractions_continued_along_a_straight_load_path(monkeypatch, form):
     """Steel on aluminium fretting, 32², 20 steps: starting each instant of a straight
-    stretch from q(k−1) + c (q(k−1) − q(k−2)) gives the instants of the plain start q(k−1)
-    within 1e-7 of p0 and μp0 (measured 2.6e-11 / 7.6e-10 scalar, 2.2e-11 / 9.4e-10
-    vector) for fewer FFT pairs after the first instant (measured 1 160 against 1 182
-    scalar, 2 087 against 2 149 vector; at 128² and 40 steps 63.9 against 67.2 and 130.7
-    against 142.7 a step)."""
+    stretch from q(k−1) + c (q(k−1) − q(k−2)), and its joint solve from the pressure
+    continued alike, gives the instants of the plain start within 1e-7 of p0 and μp0
+    (measured 2.4e-11 / 1.6e-9 scalar, 5.7e-11 / 3.2e-9 vector) for fewer FFT pairs
+    after the first instant (measured 1 157 against 1 182 scalar, 1 984 against 2 145
+    vector; at 128² and 40 steps 61.6 against 67.2 and 130.5 against 142.7 a step)."""
     fast = cp.simulate(steel_on_aluminium(), tangential=form)
-    monkeypatch.setattr(simulation, "continued_start", lambda prev, dq, c: prev)
+    monkeypatch.setattr(simulation, "continued_start", lambda prev, dq, c, dp=None: prev)
     slow = cp.simulate(steel_on_aluminium(), tangential=form)
     assert_same(fast, slow, 1e-7, 1e-7)
     print(fast.fft_pairs.values[1:].sum(), slow.fft_pairs.values[1:].sum())
     assert fast.fft_pairs.values[1:].sum() < slow.fft_pairs.values[1:].sum()
 
 
-def test_continued_start_moves_the_shear_alone():
-    """q + c dq where c > 0; the pressure, the displacement and the motions as they were;
-    nothing moved for c = 0 or dq = 0."""
+def test_continued_start_moves_the_starts_alone():
+    """q + c dq and the joint solve's pressure start p + c dp (clipped at 0) where c > 0;
+    the pressure the normal solves start from, the displacement and the motions as they
+    were; nothing moved for c = 0 or zero increments, the pressure start only with dp."""
     from contactpipe.solver.warm_start import continued_start
     rng = np.random.default_rng(3)
     prev = Previous(rng.normal(size=(2, 8, 8)), rng.normal(size=(3, 8, 8)),
                     rng.random((8, 8)), None, np.zeros(6))
-    dq = rng.normal(size=(2, 8, 8))
-    out = continued_start(prev, dq, 0.5)
+    dq, dp = rng.normal(size=(2, 8, 8)), rng.normal(size=(8, 8))
+    out = continued_start(prev, dq, 0.5, dp)
     np.testing.assert_array_equal(out.q, prev.q + 0.5 * dq)
+    np.testing.assert_array_equal(out.p_start, np.maximum(prev.p_guess + 0.5 * dp, 0.0))
+    assert out.p_start.min() == 0.0 < out.p_start.max()       # some cells clipped
     assert out.u is prev.u and out.p_guess is prev.p_guess and out.motion is prev.motion
-    assert continued_start(prev, dq, 0.0) is prev
-    assert continued_start(prev, np.zeros_like(dq), 1.0) is prev
+    assert continued_start(prev, dq, 0.5).p_start is None
+    assert continued_start(prev, dq, 0.0, dp) is prev
+    assert continued_start(prev, np.zeros_like(dq), 1.0, np.zeros_like(dp)) is prev
+    only_p = continued_start(prev, np.zeros_like(dq), 1.0, dp)
+    assert only_p.q is prev.q and only_p.p_start is not None
 
 
 def test_follow_bound_puts_slip_cells_on_the_new_bound():

@@ -175,15 +175,16 @@ def test_damaged_resume_state_through_the_command_line(tmp_path):
     cp.open_archive(target, verify=True)
 
 
-def test_a_checkpoint_without_the_shear_increment_resumes(tmp_path):
-    """A checkpoint keeps the last instant's shear increment (the start of the next
-    instant along a straight load path); one written before it was kept resumes, its next
-    instant started from q as it is, and the run agrees with an uninterrupted one within
-    1e-7 of each variable's scale."""
+def test_a_checkpoint_without_the_increments_resumes(tmp_path):
+    """A checkpoint keeps the last instant's shear and pressure increments (the start of
+    the next instant along a straight load path); one written before they were kept
+    resumes, its next instant started from q and p as they are, and the run agrees with
+    an uninterrupted one within 1e-7 of each variable's scale."""
     scene, target, part, ckpt = interrupted(tmp_path)
     with np.load(ckpt) as z:
         assert z["dq"].shape == z["q"].shape and np.any(z["dq"])
-        kept = {k: z[k] for k in z.files if k != "dq"}
+        assert z["dp"].shape == z["p"].shape and np.any(z["dp"])
+        kept = {k: z[k] for k in z.files if k not in ("dq", "dp")}
     with open(ckpt, "wb") as f:
         np.savez(f, **kept)
     with warnings.catch_warnings():

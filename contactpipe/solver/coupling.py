@@ -156,6 +156,11 @@ class Previous:
         The rigid motions reached at the previous instant (ω3, ω1, ω2, φ1, φ2, φ3) [m,
         rad]: a displacement-controlled tangential freedom moves by the difference.
         Absent: zeros (from rest).
+    p_start : ndarray (N1, N2), optional
+        The joint solve's pressure start [Pa] where it differs from ``p_guess``: the
+        pressure continued along a straight load path
+        (:func:`contactpipe.solver.warm_start.continued_start`). The normal solves of the
+        block Gauss-Seidel passes start from ``p_guess`` whatever it is.
     """
 
     q: np.ndarray
@@ -163,6 +168,7 @@ class Previous:
     p_guess: np.ndarray
     normal: NormalResult | None = None
     motion: np.ndarray | None = None
+    p_start: np.ndarray | None = None
 
 
 @dataclass
@@ -298,7 +304,7 @@ class _Instant:
         (:func:`.joint.finish_vector`); None when the joint solve did not converge (the
         block Gauss-Seidel passes then take over from the start)."""
         prev, U, op, mu = self.prev, self.U, self.op, self.mu
-        p0 = prev.p_guess
+        p0 = prev.p_guess if prev.p_start is None else prev.p_start
         if not np.any(p0 > 0):
             # nothing in contact yet (a preload's first sub-step): the pressure of the
             # normal problem alone, by its multilevel start, begins the joint solve

@@ -41,6 +41,9 @@ class State:
     dq : ndarray (2, N1, N2)
         The last instant's shear increment [Pa], which continues the shear along a
         straight load path (:func:`contactpipe.solver.warm_start.continued_start`).
+    dp : ndarray (N1, N2)
+        The last instant's pressure increment [Pa], which continues the joint solve's
+        pressure start alike.
     """
 
     p: np.ndarray
@@ -54,10 +57,13 @@ class State:
     k: int = -1
     phi: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
     dq: np.ndarray | None = None
+    dp: np.ndarray | None = None
 
     def __post_init__(self):
         if self.dq is None:
             self.dq = np.zeros_like(self.q)
+        if self.dp is None:
+            self.dp = np.zeros_like(self.p)
 
     @classmethod
     def initial(cls, shape, memories) -> "State":
@@ -74,7 +80,8 @@ class State:
     def arrays(self) -> dict:
         """The arrays a checkpoint stores (the last normal solution is not kept)."""
         out = {"p": self.p, "q": self.q, "u": self.u, "s": self.s, "omega": self.omega,
-               "phi": self.phi, "dissipation": np.array(self.dissipation), "dq": self.dq}
+               "phi": self.phi, "dissipation": np.array(self.dissipation), "dq": self.dq,
+               "dp": self.dp}
         for i, m in enumerate(self.memories):
             if m is not None:
                 out.update({f"mem{i}_{key}": np.asarray(v) for key, v in m.state().items()})
@@ -99,15 +106,14 @@ class State:
         self.omega = np.array(arrays["omega"], dtype=float)
         self.phi = np.array(arrays["phi"], dtype=float)
         self.dissipation = float(arrays["dissipation"])
-        # a checkpoint written before the shear increment was kept: the next instant
-        # starts from q as it is (a start only; the instants agree within the tolerance)
-        if "dq" in arrays:
-            if np.shape(arrays["dq"]) != (2, n1, n2):
-                raise ValueError(f"dq has shape {np.shape(arrays['dq'])}, expected "
-                                 f"{(2, n1, n2)}")
-            self.dq = np.array(arrays["dq"], dtype=float)
-        else:
-            self.dq = np.zeros((2, n1, n2))
+        # a checkpoint written before the increments were kept: the next instant starts
+        # from q and p as they are (a start only; the instants agree within the tolerance)
+        for key, shape in (("dq", (2, n1, n2)), ("dp", (n1, n2))):
+            if key in arrays and np.shape(arrays[key]) != shape:
+                raise ValueError(f"{key} has shape {np.shape(arrays[key])}, expected "
+                                 f"{shape}")
+            setattr(self, key, np.array(arrays[key], dtype=float) if key in arrays
+                    else np.zeros(shape))
         for i, m in enumerate(self.memories):
             if m is not None:
                 m.load_state({key[len(f"mem{i}_"):]: v for key, v in arrays.items()

@@ -2,13 +2,15 @@
 for the sub-steps of a growing load (the frictional preload).
 
 Along a straight stretch of the load path (the increment into instant k is c times the one
-into k − 1, :meth:`contactpipe.loading.Programs.continuation`) the shear moves nearly as
-it did: q(k−1) + c (q(k−1) − q(k−2)) starts the instant closer than q(k−1) does
-(:func:`continued_start`; the pressure is left as it is, a first normal solve being cheaper
-from it). Measured at 128², 40-step fretting: steel on aluminium 67.2 → 63.8 FFT pairs a
-step in the one-component form, 142.7 → 130.7 in the vector form; steel on steel 14.5 →
-14.0 and 41.5 → 39.7 (docs/design-choices.md). At a knot's turn or a reversal it is not
-used: the shear's last increment says nothing of the next one there.
+into k − 1, :meth:`contactpipe.loading.Programs.continuation`) the tractions move nearly
+as they did: q(k−1) + c (q(k−1) − q(k−2)) starts the instant closer than q(k−1) does, and
+so does the pressure continued alike for the joint solve (:func:`continued_start`; the
+block Gauss-Seidel passes' first normal solve starts from p(k−1), cheaper from it).
+Measured at 128², 40-step fretting: steel on aluminium 67.2 → 63.8 FFT pairs a step in the
+one-component form with the shear continued, 61.6 with the pressure too; 142.7 → 130.7 in
+the vector form (130.5 with the pressure); steel on steel 14.5 → 14.0 and 41.5 → 39.7
+(docs/design-choices.md). At a knot's turn or a reversal it is not used: the last
+increments say nothing of the next ones there.
 
 Under a growing normal load on a gap homogeneous of degree d in the distance from its apex
 (a sphere or an ellipsoid: d = 2), the contact grows self-similarly: its size goes as
@@ -43,7 +45,7 @@ def _stretch(f, lam, centre):
                                    order=1, mode="constant", cval=0.0)
 
 
-def continued_start(previous, dq, c):
+def continued_start(previous, dq, c, dp=None):
     """The warm start of an instant that goes on along a straight load path.
 
     Parameters
@@ -55,17 +57,24 @@ def continued_start(previous, dq, c):
     c : float
         The ratio of the load's increments (:meth:`Programs.continuation`), 0 where the
         path turns [1].
+    dp : ndarray (N1, N2), optional
+        The last instant's pressure increment p(k−1) − p(k−2) [Pa].
 
     Returns
     -------
     Previous
-        ``previous`` with its shear, the start and nothing else (the slip is measured from
-        ``u``), moved on by c dq; unchanged for c = 0. The solves project a start that
-        leaves a friction disk back onto it.
+        ``previous`` with its shear moved on by c dq, and its joint solve's pressure start
+        ``p_start`` by c dp (clipped at 0), the starts and nothing else (the slip is
+        measured from ``u``, the normal solves start from ``p_guess``); unchanged for
+        c = 0 or zero increments. The solves project a start that leaves a friction disk
+        back onto it, and rescale the pressure to its force.
     """
-    if c <= 0.0 or not np.any(dq):
-        return previous
-    return replace(previous, q=previous.q + c * dq)
+    moves = {}
+    if c > 0.0 and np.any(dq):
+        moves["q"] = previous.q + c * dq
+    if c > 0.0 and dp is not None and np.any(dp):
+        moves["p_start"] = np.maximum(previous.p_guess + c * dp, 0.0)
+    return replace(previous, **moves) if moves else previous
 
 
 def self_similar_start(previous, ratio, exponent):

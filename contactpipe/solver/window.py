@@ -147,7 +147,8 @@ def _solve_on(op, window, gap, U, W, T, cell_area, mu, plan, previous, limits, c
     reused = previous.normal
     cut = None if reused is None else replace(reused, p=reused.p[r, c], Ap=reused.Ap[r, c])
     prev = Previous(previous.q[:, r, c], previous.u[:, r, c], previous.p_guess[r, c],
-                    cut, previous.motion)
+                    cut, previous.motion,
+                    None if previous.p_start is None else previous.p_start[r, c])
     m = mu if np.ndim(mu) == 0 else mu[r, c]
     res = solve_instant(sub, gap[r, c], U[:, r, c], W, T, cell_area, m, plan, prev, limits,
                         controls=controls)
