@@ -98,22 +98,20 @@ class State:
         n1, n2 = self.p.shape
         shapes = {"p": (n1, n2), "q": (2, n1, n2), "u": (3, n1, n2), "s": (2, n1, n2),
                   "omega": (3,), "phi": (3,), "dissipation": ()}
-        for key, shape in shapes.items():
-            if np.shape(arrays[key]) != shape:
+        # the increments may be missing: a checkpoint written before they were kept; the
+        # next instant then starts from q and p as they are (a start only; the instants
+        # agree within the tolerance)
+        increments = {"dq": (2, n1, n2), "dp": (n1, n2)}
+        for key, shape in {**shapes, **increments}.items():
+            if (key in arrays or key in shapes) and np.shape(arrays[key]) != shape:
                 raise ValueError(f"{key} has shape {np.shape(arrays[key])}, expected {shape}")
         self.p, self.q, self.u, self.s = (np.asarray(arrays[key], dtype=float)
                                           for key in ("p", "q", "u", "s"))
         self.omega = np.array(arrays["omega"], dtype=float)
         self.phi = np.array(arrays["phi"], dtype=float)
         self.dissipation = float(arrays["dissipation"])
-        # a checkpoint written before the increments were kept: the next instant starts
-        # from q and p as they are (a start only; the instants agree within the tolerance)
-        for key, shape in (("dq", (2, n1, n2)), ("dp", (n1, n2))):
-            if key in arrays and np.shape(arrays[key]) != shape:
-                raise ValueError(f"{key} has shape {np.shape(arrays[key])}, expected "
-                                 f"{shape}")
-            setattr(self, key, np.array(arrays[key], dtype=float) if key in arrays
-                    else np.zeros(shape))
+        self.dq, self.dp = (np.array(arrays[key], dtype=float) if key in arrays
+                            else np.zeros(shape) for key, shape in increments.items())
         for i, m in enumerate(self.memories):
             if m is not None:
                 m.load_state({key[len(f"mem{i}_"):]: v for key, v in arrays.items()
