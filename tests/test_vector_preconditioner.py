@@ -117,22 +117,36 @@ def _cells(seed):
     return free, turning, qhat, curv
 
 
-def test_direction_is_the_filter_shifted_along_the_tangents(op):
-    """The vector CG's preconditioner: with the turning cells' axes (x1, x2) and all the
-    tangents' share on x2, z = S_c M(S_c g_c, d̄_c) per component, d̄_1 = 0, d̄_2 =
-    CURVATURE_SHIFT x the median curvature, cut back to the tangents: to 1e-12 of the
-    largest value, against the formula written out."""
+def _along_x1(turning):
+    """Slip directions ±x1 on the turning cells (a fretting load along x1)."""
+    return np.where(turning, np.stack([np.where(np.arange(N2) >= N2 / 2, 1.0, -1.0)
+                                       * np.ones((N1, N2)), np.zeros((N1, N2))]), 0.0)
+
+
+def _x1_direction(op, curvature):
+    """(M, a, z, g, curv, free, turning, d̄_2): the direction of a random residual on
+    _cells(8) slipping along ±x1, the curvature ``curvature`` x its draw x a."""
     from contactpipe.solver import disk_cg
     M = op.tangential_preconditioner()
     a = op.self_influence("11")
     free, turning, _, curv = _cells(8)
-    qhat = np.where(turning, np.stack([np.where(np.arange(N2) >= N2 / 2, 1.0, -1.0)
-                                       * np.ones((N1, N2)), np.zeros((N1, N2))]), 0.0)
-    curv = curv * a
+    qhat = _along_x1(turning)
+    curv = curvature * curv * a
     g = np.random.default_rng(9).standard_normal((2, N1, N2))
     g[0] = np.where(turning, 0.0, g[0])                 # tangential on turning cells
     z = direction(M, g, curv, qhat, a, free, turning)
     d2 = disk_cg.CURVATURE_SHIFT * float(np.median(curv[turning]))
+    return M, a, z, g, curv, free, turning, d2
+
+
+def test_direction_is_the_filter_shifted_along_the_tangents(op):
+    """The vector CG's preconditioner below the band gate: with the turning cells' axes
+    (x1, x2) and all the tangents' share on x2, z = S_c M(S_c g_c, d̄_c) per component,
+    d̄_1 = 0, d̄_2 = CURVATURE_SHIFT x the median curvature (here 0.3 a), cut back to the
+    tangents: to 1e-12 of the largest value, against the formula written out."""
+    from contactpipe.solver import disk_cg
+    M, a, z, g, curv, free, turning, d2 = _x1_direction(op, 0.1)
+    assert 0.0 < d2 < disk_cg.BAND_GATE * a
     act = free | turning
     S1, S2 = np.sqrt(a / (a + curv)) * act, np.sqrt((a + d2) / (a + curv)) * act
     expect = np.stack([S1 * M(S1 * g[0], 0.0), S2 * M(S2 * g[1], d2)])
@@ -140,14 +154,49 @@ def test_direction_is_the_filter_shifted_along_the_tangents(op):
     np.testing.assert_allclose(z, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
 
 
-def test_direction_is_symmetric_positive_semidefinite(op):
+def test_direction_in_two_bands_above_the_gate(op):
+    """Above the gate (d̄_2 about 3 a) the tangents' component is filtered in two bands,
+    each scaled by the cells' diagonal at its stiffness: z_2 = H M_high(H g_2, d̄_2) +
+    L M_low(L g_2, d̄_2), H = √(K̂_f/(K̂_f + d_i)), L = √(k/(k + d_i)), k = LOW_BAND x d̄_2,
+    both 1 on free cells; x1 as below the gate: to 1e-12 of the largest value."""
+    from contactpipe.solver import disk_cg
+    M, a, z, g, curv, free, turning, d2 = _x1_direction(op, 1.0)
+    assert d2 > disk_cg.BAND_GATE * a
+    act = free | turning
+    S1 = np.sqrt(a / (a + curv)) * act
+    H = np.sqrt(np.where(turning, M.finest / (M.finest + curv), act))
+    k = disk_cg.LOW_BAND * d2
+    L = np.sqrt(np.where(turning, k / (k + curv), act))
+    expect = np.stack([S1 * M(S1 * g[0], 0.0),
+                       H * M(H * g[1], d2, band="high") + L * M(L * g[1], d2, band="low")])
+    expect[0] = np.where(turning, 0.0, expect[0])
+    np.testing.assert_allclose(z, expect, rtol=0, atol=1e-12 * np.abs(expect).max())
+
+
+@pytest.mark.parametrize("shift", [0.5, 3.0, 30.0])
+def test_bands_sum_to_the_unshifted_filter(op, shift):
+    """M_high(v, d) + M_low(v, d) = M(v, 0) to 1e-12 of its largest value, and each band
+    is positive semi-definite (⟨v, M_band v⟩ ≥ 0), for d = 0.5, 3 and 30 self-influences."""
+    M = op.tangential_preconditioner()
+    d = shift * op.self_influence("11")
+    v = np.random.default_rng(12).standard_normal((N1, N2))
+    high, low, plain = M(v, d, band="high"), M(v, d, band="low"), M(v, 0.0)
+    np.testing.assert_allclose(high + low, plain, rtol=0, atol=1e-12 * np.abs(plain).max())
+    assert float(np.sum(v * high)) > 0.0 and float(np.sum(v * low)) >= 0.0
+    with pytest.raises(ValueError, match="band"):
+        M(v, d, band="middle")
+
+
+@pytest.mark.parametrize("curvature", [0.1, 1.0])
+def test_direction_is_symmetric_positive_semidefinite(op, curvature):
     """On fields tangential on the turning cells and zero off the working set, the
     direction is a symmetric positive semi-definite map (what preconditioned CG needs):
-    ⟨u, P v⟩ = ⟨P u, v⟩ to 1e-12, ⟨v, P v⟩ ≥ 0."""
+    ⟨u, P v⟩ = ⟨P u, v⟩ to 1e-12, ⟨v, P v⟩ ≥ 0; in one band and in two (curvature 0.05-2
+    and 0.5-20 self-influences)."""
     M = op.tangential_preconditioner()
     a = op.self_influence("11")
     free, turning, qhat, curv = _cells(10)
-    curv = curv * a
+    curv = curvature * curv * a
     act = free | turning
     rng = np.random.default_rng(11)
 
@@ -159,3 +208,35 @@ def test_direction_is_symmetric_positive_semidefinite(op):
     Pu, Pv = (direction(M, w, curv, qhat, a, free, turning) for w in (u, v))
     assert float(np.sum(u * Pv)) == pytest.approx(float(np.sum(Pu * v)), rel=1e-12)
     assert float(np.sum(v * Pv)) > 0.0 and float(np.sum(u * Pu)) > 0.0
+
+
+def test_a_cell_turning_too_far_has_its_own_step_shortened():
+    """On circles of radius 1 (4 x 4 cells, A = I, no rows): a turning cell whose tangent
+    step would be 2 (four times SPIN) takes a quarter of it and ends on its circle turned
+    by atan(SPIN); a turning cell stepping 0.1 and the stick cells take the whole step
+    (turned by atan(0.1), moved by τ t). No cell over SPIN: no shortening (None)."""
+    from contactpipe.solver import disk_cg
+    from contactpipe.solver.cg import Constraints
+    n = 4
+    rho = np.ones((n, n))
+    turning = np.zeros((n, n), dtype=bool)
+    turning[0, :2] = True
+    stick = ~turning
+    x = np.zeros((2, n, n))
+    x[0, turning] = 1.0                                  # on the circle at angle 0
+    t = np.full((2, n, n), 0.01)
+    t[:, turning] = 0.0
+    t[1, 0, 0], t[1, 0, 1] = -2.0, -0.1                  # tangent steps −τ t along +x2
+    assert disk_cg.shortened(t, 0.1, rho, turning) is None
+    short = disk_cg.shortened(t, 1.0, rho, turning)
+    np.testing.assert_allclose(short[0, :2], [disk_cg.SPIN / 2.0, 1.0], rtol=1e-14)
+    assert np.all(short[stick] == 1.0)
+    x_new, Ax, *_ = disk_cg._step(lambda v: v.copy(), x, x.copy(), 1.0, t, t.copy(), rho,
+                                  Constraints.none((2, n, n)), (rho > 0, stick, turning),
+                                  None, None, 0.0, None, 1e-9, short)
+    angle = np.arctan2(x_new[1], x_new[0])
+    assert angle[0, 0] == pytest.approx(np.arctan(disk_cg.SPIN), rel=1e-12)
+    assert angle[0, 1] == pytest.approx(np.arctan(0.1), rel=1e-12)
+    np.testing.assert_allclose(np.hypot(*x_new[:, turning]), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(x_new[:, stick], -0.01, rtol=1e-12)
+    np.testing.assert_allclose(Ax, x_new, rtol=0, atol=1e-12)    # A = I, the product kept

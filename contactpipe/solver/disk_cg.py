@@ -20,11 +20,14 @@ The iteration, over all contact cells at once:
   method for 3D frictional contact problems"); the previous direction is transported to
   the current tangents;
 * the direction is the residual filtered by the (−Δ)^½ filter shifted by the circles'
-  curvature along the turning cells' tangents (:func:`direction`, :func:`slip_axes`), or
-  without a filter TangCG's diagonal scaling;
+  curvature along the turning cells' tangents (:func:`direction`, :func:`slip_axes`) — in
+  two frequency bands, each scaled by the cells' own diagonal at its stiffness, where the
+  shift is large — or without a filter TangCG's diagonal scaling;
 * the line search measures the step's curvature along the circles, not only along their
   tangents (:func:`curved`): a turning cell's Hessian is the operator's plus the circle's
   curvature |r·q̂|/ρ;
+* no turning cell turns by more than :data:`SPIN` in one step: a cell that would has its
+  own step shortened (the others take the full one);
 * after the step, stick cells pushed past the disk are projected radially (they join the
   slip set), turning cells put back on their circles, the rows restored by projecting the
   stick cells (:func:`restore_rows`);
@@ -44,9 +47,9 @@ import numpy as np
 
 from .cg import BlockSums, disk_project, project_rows
 
-__all__ = ["CURVATURE_SHIFT", "DiskResult", "LAG", "PressureBlock", "SNAP", "STALL",
-           "curvature", "curved", "direction", "disk_cg", "disk_start", "magnitude",
-           "restore_rows", "slip_axes"]
+__all__ = ["BAND_GATE", "CURVATURE_SHIFT", "DiskResult", "LAG", "LOW_BAND",
+           "PressureBlock", "SNAP", "SPIN", "STALL", "curvature", "curved", "direction",
+           "disk_cg", "disk_start", "magnitude", "restore_rows", "shortened", "slip_axes"]
 
 #: A warm start's cell within SNAP x tol (relative) of its bound starts on it [1].
 SNAP = 0.1
@@ -61,6 +64,21 @@ LAG = 0.1
 #: turning cells' tangents (0.2 / 0.3 / 0.5 there: 103.4 / 101.5 / 103.4 FFT pairs a step
 #: of the bench's 40-step steel-on-aluminium fretting at 64²) [1].
 CURVATURE_SHIFT = 0.3
+
+#: An axis whose shift d̄_c exceeds this fraction of the self-influence a is filtered in
+#: two bands (:func:`direction`): with one, a stick cell's smooth shear is over-weighted
+#: (a + d̄_c)/a times, and d̄_c/a doubles with each refinement of the grid (the curvature
+#: does not depend on it, a ∝ cell size) [1].
+BAND_GATE = 0.5
+
+#: The low band's cells are scaled as at the stiffness LOW_BAND x d̄_c (6 / 8 / 10:
+#: 105.1 / 103.5 / 104.8 FFT pairs a step of the bench's steel-on-aluminium fretting at
+#: 128²) [1].
+LOW_BAND = 8.0
+
+#: The largest angle [rad] a turning cell may turn in one step; a cell that would turn
+#: further has its own step shortened to it.
+SPIN = 0.5
 
 #: Iterations without halving the best step before the CG stops, not converged (it
 #: stalls where nearly every cell turns on its circle; the vector form's projected
@@ -220,6 +238,19 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     each cell's own diagonal (d_i = 0 on free cells); z turned back to x1, x2 and cut back
     to the tangents on turning cells.
 
+    Where d̄_c > :data:`BAND_GATE` x a, the component is filtered in two bands instead
+    (``M``'s ``band``, which sum to the unshifted filter):
+    z_c = H_c M_high(H_c gt_c, d̄_c) + L_c M_low(L_c gt_c, d̄_c), H_c = √(K̂_f/(K̂_f + d_i))
+    the cells' diagonal at the finest mode's stiffness K̂_f, L_c = √(k/(k + d_i)) at
+    k = :data:`LOW_BAND` x d̄_c (1 on free cells in both). A stick cell then keeps the
+    unshifted filter at every frequency, where one band over-weighted its smooth shear
+    (a + d̄_c)/a times (the top eigenvalue of the preconditioned Hessian, which grows as
+    the grid is refined), and a turning cell is scaled by its own curvature where the
+    curvature outweighs K̂. One more field filtered (a quarter of an FFT pair): on the
+    bench's steel-on-aluminium fretting the last pass's condition number 7.27 → 4.19 at
+    128², iterations per step 17.0 / 19.2 / 21.7 at 64² / 128² / 256² against 18.9 / 26.2
+    / 36.2 (docs/design-choices.md).
+
     The curvature outweighs the self-influence 2-10 times on a fretting step's slip
     annulus, so the unshifted filter (the scalar CG's) is no better than the diagonal;
     shifted, the iterations fall by a third. It acts only along the tangents: under a
@@ -235,13 +266,41 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     else:
         axes, shift = np.eye(2), np.zeros(2)
     g = np.einsum("ci,i...->c...", axes, gt)
-    S = np.sqrt(np.where(free | turning, 1.0 / (a_self + curv), 0.0))   # one field's root
-    S = np.sqrt(a_self + shift)[:, None, None] * S
-    z = M(S * g, shift)
-    z *= S
+    act = free | turning
+    S = np.sqrt(np.where(act, 1.0 / (a_self + curv), 0.0))   # one field's root
+    banded = shift > BAND_GATE * a_self
+    one = ~banded
+    z = np.empty_like(g)
+    if one.any():
+        Sc = np.sqrt(a_self + shift[one])[:, None, None] * S
+        z[one] = M(Sc * g[one], shift[one])
+        z[one] *= Sc
+    for c in np.flatnonzero(banded):
+        d = shift[c]
+        z[c] = 0.0
+        for band, k in (("high", M.finest), ("low", LOW_BAND * d)):
+            B = np.sqrt(np.where(turning, k / (k + curv), act))
+            z[c] += B * M(B * g[c], d, band=band)
     z = np.einsum("ci,c...->i...", axes, z)
     along = qhat[0] * z[0] + qhat[1] * z[1]
     return np.where(turning, z - along * qhat, z)
+
+
+def shortened(t, tau, rho, turning):
+    """Per cell, the fraction of the step τ t that a turning cell may take without turning
+    by more than :data:`SPIN` (its tangent step τ |t| at most SPIN ρ), 1 elsewhere; None
+    where every cell takes the whole step. Shortening the cells that would turn too far,
+    and not the step of all, keeps the others' progress: capping τ on the first
+    tangential step of the bench's fretting (the preload's radial shear turned round to
+    the load) made every step of its second pass a restart, 45 iterations where 6
+    suffice (docs/design-choices.md)."""
+    if not turning.any():
+        return None
+    spin = magnitude(t[-2:])
+    spin *= tau / rho
+    if not float(spin.max(where=turning, initial=0.0)) > SPIN:
+        return None
+    return np.where(turning & (spin > SPIN), SPIN / np.maximum(spin, SPIN), 1.0)
 
 
 def _conjugate(t, z, rz, rz_old, gr, qhat, turning):
@@ -260,17 +319,20 @@ def _change(x_new, x, scale) -> float:
     return float(np.abs(x_new - x).sum()) / scale
 
 
-def _step(apply, x, Ax, tau, t, r, rho, con, cells, pressure, scale, lag, pending, tol):
-    """One step x − τ t (r = A t) projected: p clipped at 0 and its row restored; stick
-    cells pushed past their disk projected radially, turning cells put back on their
-    circles, the rows restored. A x follows the step; the projection's correction joins
-    ``pending`` while the corrections summed (``lag``, relative) stay below :data:`LAG` x
-    tol, else its product (with the pending ones) is added.
+def _step(apply, x, Ax, tau, t, r, rho, con, cells, pressure, scale, lag, pending, tol,
+          short=None):
+    """One step x − τ t (r = A t) projected: p clipped at 0 and its row restored; the
+    shear of a cell that would turn too far moved by τ ``short`` t only (``short`` per
+    cell, 1 where the step is whole; None: none), stick cells pushed past their disk
+    projected radially, turning cells put back on their circles, the rows restored. A x
+    follows the step; the projection's correction joins ``pending`` while the corrections
+    summed (``lag``, relative) stay below :data:`LAG` x tol, else its product (with the
+    pending ones) is added.
     Returns (x, A x, the step's size, lag, pending)."""
     movable, stick, turning = cells
     x_new = x - tau * t
     Ax_new = Ax - tau * r
-    s = x_new[-2:]
+    s = x_new[-2:] if short is None else x[-2:] - (tau * short) * t[-2:]
     m = magnitude(s)
     over = movable & (m > rho)
     fix = over | (turning & (m > 0))
@@ -389,16 +451,10 @@ def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1
             err = 0.0
             break
         tau = float(np.sum(gr * t)) / denom
-        if turning.any():       # no cell turns by more than half a radian in one step
-            spin = magnitude(t[-2:])
-            spin /= rho_safe
-            spin_max = float(spin.max(where=turning, initial=0.0))
-            if tau * spin_max > 0.5:
-                tau = 0.5 / spin_max
-                sets_old = None
+        short = shortened(t, tau, rho_safe, turning)
         x, Ax, err, lag, pending = _step(apply, x, Ax, tau, t, r, rho, con,
                                          (movable, stick, turning), pressure, scale, lag,
-                                         pending, tol)
+                                         pending, tol, short)
         if not err >= 0.0:      # NaN: the iterate is lost
             err = np.inf
             break

@@ -246,7 +246,9 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
 
     by the projected CG of :func:`contactpipe.solver.disk_cg.disk_cg` with its pressure
     block: one operator application is three FFT pairs (three forward transforms, nine
-    kernel products, three inverse), the filters three quarters of one. The passes, their
+    kernel products, three inverse), the filters three quarters of one (one where the
+    tangents' component is filtered in two bands:
+    :func:`~contactpipe.solver.disk_cg.direction`). The passes, their
     inexact schedule and their end are :func:`solve_joint`'s (:class:`_Schedule`); a
     pass's start moves the slip cells onto their moved bound and updates A x by the
     start's change (a zero pressure change costs no forward transform).

@@ -247,6 +247,18 @@ class ContactOperator:
         self-influence 2-10 times and makes the plain (−Δ)^½ filter useless. ``d`` is one
         number, or one per stacked field of ``v`` (the CG shifts the component along the
         turning cells' tangents, not the one across them).
+
+        ``M(v, d, band="high")`` and ``M(v, d, band="low")`` split the unshifted filter
+        1/K̂ = σ/λ into two bands, K̂ = λ/σ the model and K̂_f = λ/σ_max its finest-mode
+        value (``M.finest`` [m/Pa]):
+
+            high: (K̂_f + d) / (K̂ (K̂ + d)),    low: (K̂ − K̂_f) / (K̂ (K̂ + d)),
+
+        both ≥ 0 and summing to σ/λ; the high band is the shifted filter at the finest
+        mode and falls off where K̂ outgrows d. The vector CG scales each band by the
+        cells' own diagonal at its stiffness (:func:`contactpipe.solver.disk_cg.direction`),
+        so that a stick cell keeps the plain filter at every frequency while a turning
+        cell is shifted by its own curvature where the curvature counts.
         """
         if "precondition_t" not in self._derived:
             conv = self.conv
@@ -258,11 +270,22 @@ class ContactOperator:
         sigma, lam = self._derived["precondition_t"]
         scale = 1.0 / (self.conv.n1 * self.conv.n2)
 
-        def apply(v, d=0.0, out=None):
+        finest = lam / float(sigma.max())
+
+        def apply(v, d=0.0, out=None, band=None):
             d = np.asarray(d, dtype=float)
             if d.ndim:                      # one shift per stacked field
                 d = d.reshape(d.shape + (1, 1))
-            return self.conv.periodic_filter(sigma * (scale / (lam + d * sigma)), v, out=out)
+            if band is None:
+                symbol = sigma * (scale / (lam + d * sigma))
+            elif band == "high":            # (K̂_f + d) σ² / (λ (λ + d σ))
+                symbol = (finest + d) * sigma * sigma * (scale / (lam * (lam + d * sigma)))
+            elif band == "low":             # σ (λ − K̂_f σ) / (λ (λ + d σ))
+                symbol = sigma * (lam - finest * sigma) * (scale / (lam * (lam + d * sigma)))
+            else:
+                raise ValueError(f"band must be None, 'high' or 'low', not {band!r}")
+            return self.conv.periodic_filter(symbol, v, out=out)
+        apply.finest = finest
         return apply
 
     def coarse_normal(self):
