@@ -267,11 +267,11 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
         axes, shift = np.eye(2), np.zeros(2)
     g = np.einsum("ci,i...->c...", axes, gt)
     act = free | turning
-    S = np.sqrt(np.where(act, 1.0 / (a_self + curv), 0.0))   # one field's root
     banded = shift > BAND_GATE * a_self
     one = ~banded
     z = np.empty_like(g)
     if one.any():
+        S = np.sqrt(np.where(act, 1.0 / (a_self + curv), 0.0))   # one field's root
         Sc = np.sqrt(a_self + shift[one])[:, None, None] * S
         z[one] = M(Sc * g[one], shift[one])
         z[one] *= Sc
