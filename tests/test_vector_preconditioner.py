@@ -231,12 +231,14 @@ def test_a_cell_turning_too_far_has_its_own_step_shortened():
     short = disk_cg.shortened(t, 1.0, rho, turning)
     np.testing.assert_allclose(short[0, :2], [disk_cg.SPIN / 2.0, 1.0], rtol=1e-14)
     assert np.all(short[stick] == 1.0)
-    x_new, Ax, *_ = disk_cg._step(lambda v: v.copy(), x, x.copy(), 1.0, t, t.copy(), rho,
-                                  Constraints.none((2, n, n)), (rho > 0, stick, turning),
-                                  None, None, 0.0, None, 1e-9, short)
+    x_new, d, err, size = disk_cg._step(x, 1.0, t, rho, Constraints.none((2, n, n)),
+                                        (rho > 0, stick, turning), None, 1.0, short)
     angle = np.arctan2(x_new[1], x_new[0])
     assert angle[0, 0] == pytest.approx(np.arctan(disk_cg.SPIN), rel=1e-12)
     assert angle[0, 1] == pytest.approx(np.arctan(0.1), rel=1e-12)
     np.testing.assert_allclose(np.hypot(*x_new[:, turning]), 1.0, rtol=1e-12)
     np.testing.assert_allclose(x_new[:, stick], -0.01, rtol=1e-12)
-    np.testing.assert_allclose(Ax, x_new, rtol=0, atol=1e-12)    # A = I, the product kept
+    # the correction is what the projection added to the plain step x − τ t
+    np.testing.assert_allclose(d, x_new - (x - t), rtol=0, atol=1e-15)
+    assert size == pytest.approx(np.abs(d).sum(), rel=1e-14)
+    assert err == pytest.approx(np.abs(x_new - x).sum(), rel=1e-14)

@@ -35,9 +35,14 @@ The iteration, over all contact cells at once:
   by a clipped shift of the free cells, its direction the (−Δ)^½ filter scaled to K33;
 * the conjugate sequence restarts where a set changes.
 
-Each iteration costs one operator application; the projection's correction to A x is
-left out while the corrections summed stay below :data:`LAG` x tol, then added by one
-product of the correction (a block that did not move costs no forward transform).
+Each iteration costs one operator application, applied in its halves
+(:class:`contactpipe.solver.blocks.BlockOperator`): the direction's spectra give the line
+search's curvature tᵀA t by Parseval's theorem, and A x follows the projected step through
+one set of inverse transforms of −τ A t plus the projection's correction d, which so costs
+its forward transforms only (a block that did not move costs none). A correction is left
+out of A x while the corrections summed stay below :data:`LAG` x tol; where the solve
+converges, what is left out and the caller's next point (``follow``: the next coupling
+pass's start, the instant's final state) ride on the last step the same way.
 """
 from __future__ import annotations
 
@@ -89,11 +94,12 @@ STALL = 50
 @dataclass
 class DiskResult:
     x: np.ndarray               # the iterate, the shape of the start
-    Ax: np.ndarray              # A x, less ``pending`` [m]
+    Ax: np.ndarray              # A x (A of ``after`` where given), less ``pending`` [m]
     pending: np.ndarray | None  # projection corrections not yet in Ax (None: none)
     iterations: int
     residual: float             # the last step's size, or the rows' miss, relative
     converged: bool
+    after: np.ndarray | None = None   # follow's point, whose product Ax is, or None
 
 
 @dataclass
@@ -193,16 +199,16 @@ def curvature(radial, rho, turning):
     return np.where(turning, np.abs(radial) / rho, 0.0)
 
 
-def curved(t, r, curv) -> float:
-    """tᵀ(A + D) t: the curvature of the objective along the step t (r = A t; the shear is
-    t's last two components), D the circles' curvature on turning cells (:func:`curvature`;
-    t is tangent there).
+def curved(tAt, t, curv) -> float:
+    """tᵀ(A + D) t: the curvature of the objective along the step t (``tAt`` = tᵀA t;
+    the shear is t's last two components), D the circles' curvature on turning cells
+    (:func:`curvature`; t is tangent there).
 
     The step along a tangent alone, tᵀA t, overshoots where the circle bends away, and a
     CG whose every set is fixed then converges linearly (a 12-step steel-on-steel fretting
     at 128² spent 223 FFT pairs a step, solves of 200-285 iterations at about 0.95 per
     iteration; 56 with this curvature; docs/design-choices.md)."""
-    return float(np.sum(r * t)) + float(np.sum(curv * (t[-2] * t[-2] + t[-1] * t[-1])))
+    return float(tAt) + float(np.sum(curv * (t[-2] * t[-2] + t[-1] * t[-1])))
 
 
 def slip_axes(qhat, turning):
@@ -319,19 +325,16 @@ def _change(x_new, x, scale) -> float:
     return float(np.abs(x_new - x).sum()) / scale
 
 
-def _step(apply, x, Ax, tau, t, r, rho, con, cells, pressure, scale, lag, pending, tol,
-          short=None):
-    """One step x − τ t (r = A t) projected: p clipped at 0 and its row restored; the
-    shear of a cell that would turn too far moved by τ ``short`` t only (``short`` per
-    cell, 1 where the step is whole; None: none), stick cells pushed past their disk
-    projected radially, turning cells put back on their circles, the rows restored. A x
-    follows the step; the projection's correction joins ``pending`` while the corrections
-    summed (``lag``, relative) stay below :data:`LAG` x tol, else its product (with the
-    pending ones) is added.
-    Returns (x, A x, the step's size, lag, pending)."""
+def _step(x, tau, t, rho, con, cells, pressure, scale, short=None):
+    """One step x − τ t projected: p clipped at 0 and its row restored; the shear of a
+    cell that would turn too far moved by τ ``short`` t only (``short`` per cell, 1 where
+    the step is whole; None: none), stick cells pushed past their disk projected
+    radially, turning cells put back on their circles, the rows restored.
+    Returns (x_new, d, the step's size, the correction's size): d = x_new − (x − τ t)
+    the projection's correction (None where nothing moved), sizes relative (Σ|·| over
+    ``scale``, or over Σ|x_new| where it is None)."""
     movable, stick, turning = cells
     x_new = x - tau * t
-    Ax_new = Ax - tau * r
     s = x_new[-2:] if short is None else x[-2:] - (tau * short) * t[-2:]
     m = magnitude(s)
     over = movable & (m > rho)
@@ -348,27 +351,65 @@ def _step(apply, x, Ax, tau, t, r, rho, con, cells, pressure, scale, lag, pendin
         scale = max(float(np.abs(x_new).sum()), 1e-300)
     err = _change(x_new, x, scale)
     if not projected:
-        return x_new, Ax_new, err, lag, pending
+        return x_new, None, err, 0.0
     d = x_new - stepped
     size = float(np.abs(d).sum()) / scale
-    if size == 0.0:
-        return x_new, Ax_new, err, lag, pending
-    if lag + size <= LAG * tol:
-        return x_new, Ax_new, err, lag + size, d if pending is None else pending + d
-    if pending is not None:
-        d += pending
-    Ax_new += apply(d)
-    return x_new, Ax_new, err, 0.0, None
+    return x_new, (d if size > 0.0 else None), err, size
 
 
-def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
-            pressure: PressureBlock | None = None, scale=None) -> DiskResult:
+def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure):
+    """An iteration's reduced residual and its preconditioned direction.
+
+    ``g`` = A x + b. Returns (gr: the residual less the rows' multipliers, gt: gr cut
+    to the tangents on turning cells, z: the preconditioned direction on the working
+    sets (:func:`direction`; the pressure block's own), the circles' curvature, q̂, the
+    cells (movable, stick, turning), the sets whose change restarts the conjugate
+    sequence, whether a cell re-entered, the rows' multipliers)."""
+    s = x[-2:]
+    mag = magnitude(s)
+    at_bound = movable & (mag >= rho * (1.0 - 1e-12))
+    stick = movable & ~at_bound
+    if stick.any():
+        lam = con.fit(g[-2:], stick)
+    gr = g.copy()
+    gr[-2:] -= con.field(lam)
+    qhat = np.where(at_bound, s / np.where(mag > 0, mag, 1.0), 0.0)
+    radial = qhat[0] * gr[-2] + qhat[1] * gr[-1]
+    released = at_bound & (radial > 0)
+    turning = at_bound & ~released
+    free = stick | released
+    gt = gr.copy()
+    gt[-2:] = np.where(turning, gr[-2:] - radial * qhat, gr[-2:])
+    curv = curvature(radial, rho_safe, turning)
+    z = np.empty_like(x)
+    z[-2:] = con.keep(direction(M, gt[-2:] / unit, curv / (unit * unit), qhat, a_self,
+                                free, turning) / unit, free)
+    sets = (free, turning)
+    entered = bool(released.any())
+    if pressure is not None:
+        gr[0], work, back, _ = pressure.residual(g[0], x[0])
+        gt[0] = gr[0]
+        z[0] = pressure.direction(M, gr[0], work)
+        sets, entered = sets + (work,), entered or back
+    return gr, gt, z, curv, qhat, (movable, stick, turning), sets, entered, lam
+
+
+def _summed(a, b):
+    """a + b where either may be None (nothing)."""
+    if a is None:
+        return b
+    return a if b is None else a + b
+
+
+def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
+            pressure: PressureBlock | None = None, scale=None, follow=None,
+            exact=True) -> DiskResult:
     """The projected CG (module notes) from a feasible start.
 
     Parameters
     ----------
-    apply : callable
-        x ↦ A x, on x's shape.
+    A : BlockOperator
+        x ↦ A x, applied in halves (:class:`contactpipe.solver.blocks.BlockOperator`).
     b : ndarray
         The linear term, x's shape [m].
     x : ndarray (2, N1, N2), or (3, N1, N2) with a pressure block first
@@ -392,12 +433,22 @@ def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1
         x[0] is the pressure.
     scale : float, optional
         The step's size is Σ|Δx| over it; None: over Σ|x| (the stacked joint measure).
+    follow : callable, optional
+        ``follow(x) -> x′``: where the solve converges, the point the caller moves to next
+        (the next coupling pass's start, the instant's final state); its A x′ comes from
+        the last step's inverse transforms (x′ − x costs its forward transforms only).
+        Called at most once, on the converged iterate.
+    exact : bool
+        A converged result's A x takes in every correction left out (folded into the last
+        step: their forward transforms only); False leaves them in ``pending``.
 
     Returns
     -------
     DiskResult
-        ``pending`` holds the projection corrections not yet in ``Ax``; the caller adds
-        their product where it needs an exact A x.
+        ``after`` is ``follow``'s point and ``Ax`` its product where it was called;
+        ``pending`` holds the projection corrections not yet in ``Ax`` (none where it
+        converged with ``exact`` or ``follow``); the caller adds their product where it
+        needs an exact A x.
     """
     movable = rho > 0
     rho_safe = np.where(movable, rho, 1.0)      # divides where only contact cells count
@@ -406,37 +457,14 @@ def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1
     err, best, best_it = np.inf, np.inf, 0
     lam = np.zeros(con.m)
     lag, pending = 0.0, None      # corrections not yet in A x, summed, relative [1]
-    it = 0
+    after, it = None, 0
+    rhat = None                   # the step's spectra, reused
     for it in range(1, max_iter + 1):
         if it - best_it > STALL:    # no progress: leave it to the caller's fallback
             break
-        g = Ax + b
-        s = x[-2:]
-        mag = magnitude(s)
-        at_bound = movable & (mag >= rho * (1.0 - 1e-12))
-        stick = movable & ~at_bound
-        if stick.any():
-            lam = con.fit(g[-2:], stick)
-        gr = g.copy()
-        gr[-2:] -= con.field(lam)
-        qhat = np.where(at_bound, s / np.where(mag > 0, mag, 1.0), 0.0)
-        radial = qhat[0] * gr[-2] + qhat[1] * gr[-1]
-        released = at_bound & (radial > 0)
-        turning = at_bound & ~released
-        free = stick | released
-        gt = gr.copy()
-        gt[-2:] = np.where(turning, gr[-2:] - radial * qhat, gr[-2:])
-        curv = curvature(radial, rho_safe, turning)
-        z = np.empty_like(x)
-        z[-2:] = con.keep(direction(M, gt[-2:] / unit, curv / (unit * unit), qhat, a_self,
-                                    free, turning) / unit, free)
-        sets = (free, turning)
-        entered = bool(released.any())
-        if pressure is not None:
-            gr[0], work, back, _ = pressure.residual(g[0], x[0])
-            gt[0] = gr[0]
-            z[0] = pressure.direction(M, gr[0], work)
-            sets, entered = sets + (work,), entered or back
+        gr, gt, z, curv, qhat, cells, sets, entered, lam = _residual(
+            x, Ax + b, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure)
+        turning = cells[2]
         rz = float(np.sum(gt * z))
         if not rz > 0.0:
             err = 0.0 if rz <= 0.0 else np.inf
@@ -445,23 +473,42 @@ def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1
                  or not all(np.array_equal(a, c) for a, c in zip(sets, sets_old)))
         t = z if reset else _conjugate(t, z, rz, rz_old, gr, qhat, turning)
         rz_old, sets_old = rz, sets
-        r = apply(t)
-        denom = curved(t, r, curv)
+        that = A.spectra(t)
+        rhat = A.product(that, out=rhat)                   # A t's spectra
+        denom = curved(A.inner(that, rhat), t, curv)
         if denom <= 0.0:
             err = 0.0
             break
         tau = float(np.sum(gr * t)) / denom
         short = shortened(t, tau, rho_safe, turning)
-        x, Ax, err, lag, pending = _step(apply, x, Ax, tau, t, r, rho, con,
-                                         (movable, stick, turning), pressure, scale, lag,
-                                         pending, tol, short)
+        x_new, d, err, size = _step(x, tau, t, rho, con, cells, pressure, scale, short)
         if not err >= 0.0:      # NaN: the iterate is lost
             err = np.inf
             break
-        if err < tol:
+        done = err < tol
+        if d is not None and not done and lag + size <= LAG * tol:
+            lag, pending, d = lag + size, _summed(pending, d), None
+        elif d is not None or (done and (exact or follow is not None)):
+            d, lag, pending = _summed(d, pending), 0.0, None
+        if done and follow is not None:
+            after = follow(x_new)
+            d = _summed(d, after - x_new)
+        rhat *= -tau                                        # A x += A(−τ t + d)
+        if d is not None and d.any():
+            rhat += A.product(A.spectra(d))
+        Ax = Ax + A.space(rhat)
+        x = x_new
+        if done:
             break
         if err < 0.5 * best:
             best, best_it = err, it
+    return _result(A, x, Ax, rho, con, pressure, err, tol, it, pending, after, follow, exact)
+
+
+def _result(A, x, Ax, rho, con, pressure, err, tol, it, pending, after, follow, exact):
+    """:func:`disk_cg`'s result: converged where the last step and the rows' miss are
+    within tol; a converged solve that took no step to fold its end into (no descent was
+    left) moves to ``follow``'s point, or takes in what it left out, by one product."""
     miss = float(np.abs(con.residual(x[-2:])).max(initial=0.0)) / max(float(rho.sum()),
                                                                       1e-300)
     if pressure is not None:
@@ -469,4 +516,12 @@ def disk_cg(apply, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1
                                                                          1e-300))
     err = max(float(err), miss)
     ok = bool(err < tol) and bool(np.all(np.isfinite(x)))
-    return DiskResult(x, Ax, pending, it, err, ok)
+    if ok and after is None and (follow is not None or (exact and pending is not None)):
+        nxt = x if follow is None else follow(x)
+        d = _summed(nxt - x, pending)
+        pending = None
+        if d.any():
+            Ax = Ax + A(d)
+        if follow is not None:
+            after = nxt
+    return DiskResult(x, Ax, pending, it, err, ok, after)

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .blocks import BlockOperator
 from .cg import BlockSums, box_cg, disk_project
 from .disk_cg import PressureBlock, disk_cg, disk_start, restore_rows
 from .tangential import follow_bound, force_rows, multipliers, scalar_multiplier, sliding
@@ -249,9 +250,12 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     kernel products, three inverse), the filters three quarters of one (one where the
     tangents' component is filtered in two bands:
     :func:`~contactpipe.solver.disk_cg.direction`). The passes, their
-    inexact schedule and their end are :func:`solve_joint`'s (:class:`_Schedule`); a
-    pass's start moves the slip cells onto their moved bound and updates A x by the
-    start's change (a zero pressure change costs no forward transform).
+    inexact schedule and their end are :func:`solve_joint`'s (:class:`_Schedule`). Where
+    a pass converges its iterate moves on (the CG's ``follow``): to the next pass's start,
+    the slip cells on their moved bound, or, after the last pass, to the final state, the
+    shear on the bound of its own pressure (:func:`_final_shear`); the move's product
+    rides on the pass's last step (the shear's two forward transforms, no inverse), so
+    the instant spends three inverse transforms per iteration and three for its start.
 
     Parameters
     ----------
@@ -273,19 +277,13 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     Returns
     -------
     JointResult
-        ``q`` (2, N1, N2), ``Ax`` (u3, u1, u2) [m]; ``converged`` False when a pass stopped
-        or the passes did not settle.
+        ``q`` (2, N1, N2) on the final bound ``bound`` = μ p, ``Ax`` (u3, u1, u2) [m] of
+        (p, q); ``converged`` False when a pass stopped or the passes did not settle.
     """
     k, conv = op.k, op.conv
-    blocks = [[k["33"], mu * k["31"], mu * k["32"]],
-              [mu * k["13"], mu * mu * k["11"], mu * mu * k["12"]],
-              [mu * k["23"], mu * mu * k["21"], mu * mu * k["22"]]]
-    shape = (3,) + p0.shape
-
-    def apply(x):                 # a zero block (a start's update) costs no transform
-        return conv.convolve_matrix(blocks, [f if f.any() else None for f in x],
-                                    out=np.empty(shape))
-
+    A = BlockOperator(conv, [[k["33"], mu * k["31"], mu * k["32"]],
+                             [mu * k["13"], mu * mu * k["11"], mu * mu * k["12"]],
+                             [mu * k["23"], mu * mu * k["21"], mu * mu * k["22"]]])
     M = op.tangential_preconditioner()
     c11, c33 = (float(np.real(k[c][conv.n1, conv.n2])) for c in ("11", "33"))
     pressure = PressureBlock(W / cell_area, c11 / c33 if c11 > 0.0 and c33 > 0.0 else 1.0)
@@ -294,58 +292,71 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     b = np.stack([b[0], mu * b[1], mu * b[2]])
     p = np.maximum(np.asarray(p0, dtype=float), 0.0)
     p *= pressure.target / p.sum()
-    s = np.asarray(q0, dtype=float) / mu
-    lag_old, Ax, pending, its, plan = None, None, None, 0, _Schedule(tol)
+    plan = _Schedule(tol)
+    x = np.concatenate([p[None], disk_start(np.asarray(q0, dtype=float) / mu, p, con,
+                                            plan.inner)])
+    Ax, its = A(x), 0
     for passes in range(1, max_passes + 1):
-        lag = p                                   # the bound of s: |s| <= p (lagged)
-        before = np.concatenate([p[None], s])
-        if lag_old is not None:                   # slip cells stay on their moved bound
-            s = follow_bound(s, lag_old, lag)
-        x = np.concatenate([p[None], disk_start(s, lag, con, plan.inner)])
-        if Ax is None:
-            Ax = apply(x)
-        else:
-            d = x - before
-            if pending is not None:
-                d += pending
-            if d.any():
-                Ax = Ax + apply(d)
-        res = disk_cg(apply, b, x, Ax, lag, con, plan.inner, max_iter, M, a_self, unit=mu,
-                      pressure=pressure)
-        pending = res.pending
+        lag = x[0]                                # the bound of s: |s| <= p (lagged)
+        end = {}
+
+        def follow(xc, lag=lag, end=end):
+            """The converged pass's (p, s) -> the next pass's start, its slip cells on
+            their moved bound, or the instant's final state (:func:`_final_shear`)."""
+            p_new, s_new = xc[0], xc[1:]
+            end["settled"] = plan.settled(p_new, lag, W, cell_area)
+            end["sliding"] = sliding(s_new, lag)
+            if end["sliding"]:
+                return xc
+            if end["settled"]:
+                s_next = _final_shear(s_new, lag, p_new, con)
+            else:
+                s_next = disk_start(follow_bound(s_new, lag, p_new), p_new, con, plan.inner)
+            return np.concatenate([p_new[None], s_next])
+
+        res = disk_cg(A, b, x, Ax, lag, con, plan.inner, max_iter, M, a_self, unit=mu,
+                      pressure=pressure, follow=follow)
         its += res.iterations
-        if not res.converged:
-            return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
-                               res.residual)
-        settled = plan.settled(res.x[0], p, W, cell_area)
-        p, s, Ax = res.x[0], res.x[1:], res.Ax
-        if sliding(s, lag):
-            # no cell sticks: the projected CG stalls on the turning circles (a 32²
-            # instant at |T| = 0.98 μW took 17 passes, 652 iterations); the passes'
+        if not res.converged or end.get("sliding"):
+            # sliding: no cell sticks, and the projected CG stalls on the turning circles
+            # (a 32² instant at |T| = 0.98 μW took 17 passes, 652 iterations); the passes'
             # vector solves have the projected gradient for it
-            return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, passes, False,
-                               plan.change)
-        lag_old = lag
-        if settled:
-            if pending is not None:               # the product made exact at the end
-                Ax = Ax + apply(pending)
+            y = res.x
+            return JointResult(y[0], mu * y[1:], mu * lag, np.nan, res.Ax, its, passes,
+                               False, res.residual if not res.converged else plan.change)
+        x, Ax = res.after, res.Ax
+        if end["settled"]:
+            p = x[0]
             omega3 = pressure.residual(Ax[0] + b[0], p)[3]
             Ax = np.stack([Ax[0], Ax[1] / mu, Ax[2] / mu])       # (u3, u1, u2)
-            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True,
+            return JointResult(p, mu * x[1:], mu * p, omega3, Ax, its, passes, True,
                                plan.change)
-    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False,
+    return JointResult(x[0], mu * x[1:], mu * lag, np.nan, Ax, its, max_passes, False,
                        plan.change)
 
 
+def _final_shear(s, lag, p, con):
+    """The shear of the last pass on the bound of its own pressure, without another
+    solve: the slip cells follow the bound (:func:`follow_bound`), a cell beyond it is
+    projected back onto its disk, and the rows are met again by a shift of the stick
+    cells (:func:`contactpipe.solver.disk_cg.restore_rows`); in s = q/μ units.
+
+    The last pass held the shear within the bound of the pass before, which differs from
+    the final one by less than the tolerance, so this moves s by the tolerance's order."""
+    s, _ = disk_project(np.where(p > 0, follow_bound(s, lag, p), 0.0), p)
+    mag = np.hypot(s[0], s[1])
+    return restore_rows(s, p, con, (p > 0) & (mag < p * (1.0 - 1e-12)))
+
+
 def finish_vector(op, j: JointResult, mu, b12, T, cell_area):
-    """The vector joint solution on the bound of its own final pressure, without another
-    solve (as :func:`finish`): the slip cells follow the bound, a cell beyond it is
-    projected back onto its disk, and the force rows are met again by a shift of the
-    stick cells (:func:`contactpipe.solver.disk_cg.restore_rows`).
+    """The vector joint solution's shear, displacement and rigid shift: the solve already
+    put the shear on the bound of its own final pressure (:func:`_final_shear`, folded
+    into its last step), so this only reorders the kept products and fits the multipliers.
 
     Parameters
     ----------
     op : ContactOperator
+        Unused: the products were kept (the argument matches :func:`finish`'s).
     j : JointResult
         A converged :func:`solve_joint_vector`.
     mu : float
@@ -362,20 +373,10 @@ def finish_vector(op, j: JointResult, mu, b12, T, cell_area):
     q : ndarray (2, N1, N2)
         The shear [Pa], |q| <= μ p with the slip cells on the bound.
     u : ndarray (3, N1, N2)
-        (u1, u2, u3) from the tractions [m]: the kept products mended for the change of q
-        (one block product of it, 2.5 FFT pairs, where it moved).
+        (u1, u2, u3) from the tractions [m].
     domega : ndarray (2,)
         The rigid shift increment Δω [m], the force rows' multipliers.
     """
-    bound = mu * j.p
-    q, _ = disk_project(np.where(bound > 0, follow_bound(j.q, j.bound, bound), 0.0), bound)
-    con = force_rows(bound.shape, T, cell_area)
-    mag = np.hypot(q[0], q[1])
-    q = restore_rows(q, bound, con, (bound > 0) & (mag < bound * (1.0 - 1e-12)))
-    dq = q - j.q
     u = np.stack([j.Ax[1], j.Ax[2], j.Ax[0]])
-    if dq.any():
-        k = op.k
-        u += op.conv.convolve_matrix([[k["11"], k["12"]], [k["21"], k["22"]],
-                                      [k["31"], k["32"]]], [dq[0], dq[1]])
-    return q, u, multipliers(con, u[:2] + b12, q, bound)
+    con = force_rows(j.bound.shape, T, cell_area)
+    return j.q, u, multipliers(con, u[:2] + b12, j.q, j.bound)

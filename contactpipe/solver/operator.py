@@ -17,6 +17,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.fft
 
+from .blocks import BlockOperator
 from .convolution import Convolver
 from .influence import body_kernel_parts, body_kernels, pair_kernels
 
@@ -151,6 +152,13 @@ class ContactOperator:
         """(u1, u2) [m] from (q1, q2) [Pa] (two FFT pairs)."""
         k = self.k
         return self.conv.convolve_matrix([[k["11"], k["12"]], [k["21"], k["22"]]], [q[0], q[1]])
+
+    def tangential_blocks(self):
+        """[K11 K12; K21 K22] as a :class:`~contactpipe.solver.blocks.BlockOperator`:
+        applied whole, (u1, u2) [m] from (q1, q2) [Pa] as :meth:`tangential_vector`, or in
+        its halves (the vector CG's steps)."""
+        k = self.k
+        return BlockOperator(self.conv, [[k["11"], k["12"]], [k["21"], k["22"]]])
 
     def coupling_to_normal(self, q1, q2=None):
         """u3 [m] from the shear tractions (K31, K32)."""

@@ -42,6 +42,7 @@ import numpy as np
 
 from .cg import (ComponentSums, Constraints, box_cg, disk_project, fista, project_box_sum,
                  project_rows)
+from .blocks import DirectOperator
 from .disk_cg import disk_cg, disk_start
 
 __all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "disk_project",
@@ -177,25 +178,28 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
     takes that curvature in.
 
     Each iteration costs one operator application (two FFT pairs; the filter half a pair
-    more), and a second one only when the projections' corrections add up. The warm
+    more, and the projection's correction, where it adds up, its forward transforms:
+    :func:`~contactpipe.solver.disk_cg.disk_cg`). The warm
     start's cells within :data:`~contactpipe.solver.disk_cg.SNAP` x tol of their bound
     start on it (:func:`~contactpipe.solver.disk_cg.disk_start`). It stops, not
     converged, when :data:`~contactpipe.solver.disk_cg.STALL` iterations pass without
     halving its best step. With ``exact`` False a converged result's A q may leave out
     the last corrections (summed, below :data:`~contactpipe.solver.disk_cg.LAG` x tol;
     so may the multipliers fitted to it): for a pass whose product the caller discards,
-    this saves the final product (two FFT pairs).
+    this saves their forward transforms (one FFT pair).
     """
     rho = bound
     make = getattr(op, "tangential_preconditioner", None) if precondition else None
     M = make() if make is not None else None
+    blocks = getattr(op, "tangential_blocks", None)
+    A = blocks() if blocks is not None else DirectOperator(op.tangential_vector)
     q = disk_start(q0, rho, con, tol)
-    Aq = op.tangential_vector(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
-    res = disk_cg(op.tangential_vector, b, q, Aq, rho, con, tol, max_iter, M,
-                  op.self_influence("11"), scale=max(float(rho.sum()), 1e-300))
+    Aq = A(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
+    res = disk_cg(A, b, q, Aq, rho, con, tol, max_iter, M, op.self_influence("11"),
+                  scale=max(float(rho.sum()), 1e-300), exact=exact)
     Aq = res.Ax
     if res.pending is not None and (exact or not res.converged):
-        Aq = Aq + op.tangential_vector(res.pending)
+        Aq = Aq + A(res.pending)
     lam = multipliers(con, Aq + b, res.x, rho)
     return TangentialResult(q=res.x, domega=np.zeros(2), Aq=Aq, iterations=res.iterations,
                             residual=res.residual, converged=res.converged,
