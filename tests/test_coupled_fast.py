@@ -457,3 +457,36 @@ def test_joint_vector_solve_folds_its_corrections_into_its_steps():
     assert np.abs(j.Ax - exact).max() <= 1e-13 * np.abs(exact).max()
     assert np.all(np.hypot(j.q[0], j.q[1]) <= j.bound * (1 + 1e-12))
     np.testing.assert_array_equal(j.bound, MU * j.p)     # on its own pressure's bound
+
+
+def test_scalar_joint_steps_fold_their_projection_products(monkeypatch):
+    """The scalar joint solve's box_cg applies its operator in halves (a
+    :class:`BlockOperator`): a projection's correction rides on the step's inverse
+    transforms. Against whole products (a plain callable; steel on aluminium, 32²,
+    T = 0.5 μW, tolerance 1e-10) it reaches the same (p, q1) (measured 1.6e-14 and 1.4e-14
+    of p's largest and μ times it; bound 1e-9) in as many iterations (18, 5 passes), for
+    fewer FFT pairs (measured 56 against 60), and spends two inverse transforms per
+    iteration besides its pass starts' (two each)."""
+    from contactpipe.solver.normal import solve_normal
+    from test_coupling import ALUMINIUM as AL, STEEL, W, instant
+    op, gap, U, cell, _, _ = instant(STEEL, AL)
+    start = solve_normal(op, gap, W, cell, np.zeros_like(gap), 1e-3, 2000).p
+    b = np.stack([gap + U[2], U[0]])
+
+    def run():
+        op.conv.reset_counts()
+        j = joint.solve_joint(op, b, W, 0.5 * MU * W, cell, MU, start, np.zeros_like(gap),
+                              1e-10, 2000, 100)
+        assert j.converged
+        return j, op.conv.pairs, op.conv.inverse_count
+
+    halves, halves_pairs, inverse = run()
+    assert inverse == 2 * (halves.iterations + halves.passes)
+    monkeypatch.setattr(joint, "BlockOperator", lambda conv, blocks: (
+        lambda x, out=None: conv.convolve_matrix(blocks, [f if f.any() else None
+                                                          for f in x], out=out)))
+    whole, whole_pairs, _ = run()
+    assert halves.iterations == whole.iterations
+    assert np.abs(halves.p - whole.p).max() <= 1e-9 * whole.p.max()
+    assert np.abs(halves.q - whole.q).max() <= 1e-9 * MU * whole.p.max()
+    assert halves_pairs < whole_pairs

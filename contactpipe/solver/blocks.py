@@ -42,6 +42,7 @@ class BlockOperator:
         self.conv = conv
         self.khat = [list(row) for row in khat]
         self.n = len(self.khat)
+        self._tmp = None
 
     def __call__(self, x, out=None):
         """A x [m] (x stacked (n, N1, N2)); a zero block costs no forward transform."""
@@ -49,15 +50,25 @@ class BlockOperator:
                                          out=out)
 
     def spectra(self, x):
-        """The zero-padded fields' spectra, None for a zero field (no transform spent)."""
-        return [self.conv.forward(f) if f.any() else None for f in x]
+        """The zero-padded fields' spectra, None for a zero field (no transform spent).
+        They lie in the engine's forward buffers: valid until the next call."""
+        out, n = [], 0
+        for f in x:
+            if f.any():
+                out.append(self.conv.forward_slot(f, n))
+                n += 1
+            else:
+                out.append(None)
+        return out
 
     def product(self, xhat, out=None):
         """Σ_j K̂_ij x̂_j per output i (n, M1, M2/2 + 1), complex; zero rows where no
         input reaches them. ``out`` (of that shape) is overwritten and returned."""
         if out is None:
             out = np.empty((self.n,) + self.conv.spec_shape, dtype=complex)
-        tmp = None
+        if self._tmp is None:
+            self._tmp = np.empty(self.conv.spec_shape, dtype=complex)
+        tmp = self._tmp
         for i, row in enumerate(self.khat):
             have = False
             for k, s in zip(row, xhat):
@@ -67,8 +78,7 @@ class BlockOperator:
                     np.multiply(k, s, out=out[i])
                     have = True
                 else:
-                    tmp = np.multiply(k, s, out=tmp)
-                    out[i] += tmp
+                    out[i] += np.multiply(k, s, out=tmp)
             if not have:
                 out[i] = 0.0
         return out
@@ -88,17 +98,13 @@ class BlockOperator:
             total += 2.0 * whole.real - edges.real
         return float(total)
 
-    def space(self, rhat, out=None):
-        """The convolutions (n, N1, N2) [m] whose spectra are ``rhat`` (one inverse
-        transform per output; a zero row costs none)."""
-        if out is None:
-            out = np.empty((self.n, self.conv.n1, self.conv.n2))
+    def add(self, Ax, rhat, factor=1.0, extra=None):
+        """Ax += the convolutions of factor x ``rhat`` (+ ``extra``, spectra of the same
+        shape, where not None), in place [m]: one inverse transform per output."""
         for i in range(self.n):
-            if rhat[i].any():
-                self.conv.inverse(rhat[i], out=out[i])
-            else:
-                out[i] = 0.0
-        return out
+            self.conv.inverse_add(rhat[i], factor, None if extra is None else extra[i],
+                                  Ax[i])
+        return Ax
 
 
 class DirectOperator:
@@ -122,5 +128,6 @@ class DirectOperator:
     def inner(self, xhat, rhat) -> float:
         return float(np.sum(xhat * rhat))
 
-    def space(self, rhat, out=None):
-        return rhat
+    def add(self, Ax, rhat, factor=1.0, extra=None):
+        Ax += factor * rhat if extra is None else factor * rhat + extra
+        return Ax

@@ -636,7 +636,9 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     Parameters
     ----------
     apply : callable
-        ``apply(x) -> A x`` (one FFT pair per call).
+        ``apply(x) -> A x`` (one FFT pair per call); a
+        :class:`~contactpipe.solver.blocks.BlockOperator` is applied in halves with
+        ``update`` (a projection's correction then costs its forward transforms only).
     b : ndarray
         Known linear term (same shape as x) [m].
     lo, hi : ndarray
@@ -688,12 +690,11 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     relative = scale is None and con is not None
     if scale is None and con is None:
         scale = max(abs(target), 1e-300)
-    # preallocated fields: the element-wise work runs in place (ufuncs with out=)
-    t = np.zeros_like(x)
+    t = np.zeros_like(x)            # preallocated: the element-wise work runs in place
     g, gr, grw, step, x_new = (np.empty_like(x) for _ in range(5))
-    G_old, working_old, err = 1.0, None, np.inf
-    lam = 0.0 if con is None else np.zeros(con.m)
+    G_old, working_old, err, lam = 1.0, None, np.inf, 0.0 if con is None else np.zeros(con.m)
     deferred, it = _Deferred(defer * tol), 0
+    halves, rhat = update and hasattr(apply, "spectra"), None
     for it in range(1, max_iter + 1):
         np.add(Ax, b, out=g)
         free = bounds.free(x)
@@ -721,8 +722,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             t += z
         G_old = max(G, 1e-300)
         working_old = working
-        r = apply(t)
-        denom = _dot(r, t)
+        r, rhat, denom = _curvature(apply, t, halves, rhat)
         if denom <= 0.0:
             err = 0.0
             break
@@ -732,14 +732,14 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             projected = _project_iterate(x_new, lo, hi, target, restore, con, movable)
             norm = max(float(np.abs(projected).sum()), 1e-300) if relative else scale
             err = _change(projected, x, norm)
-            if update:                          # A x_new = A x − τ r, then the projection's
-                Ax -= np.multiply(r, tau, out=step)
-                deferred.add(apply, Ax, np.subtract(projected, x_new, out=x_new), norm)
+            if update:                          # A x += A(−τ t + d), d the correction
+                _advance(apply, Ax, r, rhat, tau, step,
+                         deferred.take(np.subtract(projected, x_new, out=x_new), norm))
             x, Ax = projected, (Ax if update else apply(projected))
         else:                                   # x_new − x = −τ t exactly
             err = _step_change(tau, t, x_new, None if relative else scale, step)
             x, x_new = x_new, x
-            Ax -= np.multiply(r, tau, out=step)
+            _advance(apply, Ax, r, rhat, tau, step)
         if not err >= 0.0:                      # NaN: the iterate is lost
             err = np.inf
             break
@@ -748,6 +748,30 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     res = _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
     res.pending = deferred.pending
     return res
+
+
+def _curvature(apply, t, halves, rhat):
+    """(A t or None, its spectra or None, tᵀA t): in halves (``halves``, ``apply`` a
+    :class:`~contactpipe.solver.blocks.BlockOperator`) tᵀA t from t's spectra by
+    Parseval's theorem, A t left in spectra (``rhat``, reused) for :func:`_fold`."""
+    if halves:
+        that = apply.spectra(t)
+        rhat = apply.product(that, out=rhat)
+        return None, rhat, apply.inner(that, rhat)
+    r = apply(t)
+    return r, None, _dot(r, t)
+
+
+def _advance(apply, Ax, r, rhat, tau, buf, d=None):
+    """A x += A(−τ t + d) in place, d the projection's correction (None: none): from A t's
+    spectra ``rhat`` through one set of inverse transforms, d costing its forward
+    transforms only; else from A t = ``r`` and a product of d."""
+    if rhat is not None:
+        apply.add(Ax, rhat, -tau, None if d is None else apply.product(apply.spectra(d)))
+        return
+    Ax -= np.multiply(r, tau, out=buf)
+    if d is not None:
+        Ax += apply(d)
 
 
 def _step_change(tau, t, x_new, scale, buf) -> float:
@@ -770,20 +794,21 @@ class _Deferred:
     def __init__(self, limit):
         self.limit, self.lag, self.pending = limit, 0.0, None
 
-    def add(self, apply, Ax, d, norm):
-        """A x += A d now (with what waits), or d kept; ``norm`` is the convergence
-        measure's normaliser (the scale, or Σ|x| of the projected iterate)."""
+    def take(self, d, norm):
+        """d kept (None returned) while the changes summed stay within the limit, else d
+        with what waits (the caller adds its product); ``norm`` the convergence measure's
+        normaliser (the scale, or Σ|x| of the projected iterate)."""
         if self.limit > 0.0:
             size = float(np.abs(d).sum()) / norm
             if self.lag + size <= self.limit:
                 self.lag += size
                 self.pending = d.copy() if self.pending is None else \
                     np.add(self.pending, d, out=self.pending)
-                return
+                return None
         if self.pending is not None:
-            d += self.pending
+            d = d + self.pending
             self.lag, self.pending = 0.0, None
-        Ax += apply(d)
+        return d.copy()
 
 
 def _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale) -> BoxResult:

@@ -267,6 +267,32 @@ class Convolver:
         out[...] = block
         return out
 
+    def forward_slot(self, x: np.ndarray, slot: int = 0) -> np.ndarray:
+        """Spectrum of the zero-padded field ``x``, left in the engine's forward buffer
+        ``slot`` (pyFFTW; scipy: a new array): no copy, and overwritten by the next
+        forward transform into that slot."""
+        if self.backend == "pyfftw":
+            self.forward_count += 1
+            return self._execute_forward(x, slot)
+        return self.forward(x)
+
+    def inverse_add(self, spec: np.ndarray, factor: float, extra, out: np.ndarray):
+        """``out`` += the n1 x n2 block of the inverse transform of factor x ``spec``
+        (+ ``extra``, a spectrum, where not None): the sum is formed in the inverse
+        plan's input, so nothing is copied (one inverse transform)."""
+        self.inverse_count += 1
+        if self.backend == "pyfftw":
+            np.multiply(spec, factor, out=self._cin)
+            if extra is not None:
+                self._cin += extra
+            self._execute_inverse()
+            out += self._rout[:, :self.n2]
+            return out
+        full = spec * factor if extra is None else spec * factor + extra
+        out += scipy.fft.irfft2(full, s=(self.m1, self.m2), norm="forward",
+                                workers=self.threads)[:self.n1, :self.n2]
+        return out
+
     def convolve(self, khat: np.ndarray, x: np.ndarray, out: np.ndarray | None = None):
         """K ⊛ x for one kernel spectrum (one FFT pair)."""
         if self.backend == "pyfftw":      # no intermediate copies on the main path

@@ -452,6 +452,7 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
     """
     movable = rho > 0
     rho_safe = np.where(movable, rho, 1.0)      # divides where only contact cells count
+    Ax = np.array(Ax, dtype=float)              # updated in place
     t = np.zeros_like(x)
     rz_old, sets_old = 1.0, None
     err, best, best_it = np.inf, np.inf, 0
@@ -493,10 +494,8 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
         if done and follow is not None:
             after = follow(x_new)
             d = _summed(d, after - x_new)
-        rhat *= -tau                                        # A x += A(−τ t + d)
-        if d is not None and d.any():
-            rhat += A.product(A.spectra(d))
-        Ax = Ax + A.space(rhat)
+        A.add(Ax, rhat, -tau, A.product(A.spectra(d)) if d is not None and d.any()
+              else None)                                    # A x += A(−τ t + d)
         x = x_new
         if done:
             break
@@ -521,7 +520,7 @@ def _result(A, x, Ax, rho, con, pressure, err, tol, it, pending, after, follow, 
         d = _summed(nxt - x, pending)
         pending = None
         if d.any():
-            Ax = Ax + A(d)
+            Ax += A(d)
         if follow is not None:
             after = nxt
     return DiskResult(x, Ax, pending, it, err, ok, after)

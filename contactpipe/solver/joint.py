@@ -16,7 +16,9 @@ bound), with multipliers (ω3, Δω1). :func:`contactpipe.solver.cg.box_cg` solv
 the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and the (−Δ)^½ filter on
 each block as preconditioner: one operator application is two FFT pairs (two forward
 transforms, four kernel products, two inverse), the preconditioner half of one (two
-fields filtered on the unpadded grid).
+fields filtered on the unpadded grid). The operator is applied in halves
+(:class:`~contactpipe.solver.blocks.BlockOperator`): a projection's correction rides on
+the step's inverse transforms, at the cost of its forward transforms.
 
 Only the bound g = μp is then lagged. A pass moves the slip cells' shear by μ δp and the
 pressure answers through K31 only, so a pass cuts the pressure change by about μβ
@@ -134,10 +136,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     blocks = [[k["33"], mu * k["31"]], [mu * k["13"], mu * mu * k["11"]]]
     shape = (2,) + p0.shape
 
-    def apply(x):                 # a zero block (a start's update) costs no transform
-        return conv.convolve_matrix(blocks, [x[0] if x[0].any() else None,
-                                             x[1] if x[1].any() else None],
-                                    out=np.empty(shape))
+    apply = BlockOperator(conv, blocks)   # a zero block (a start's update): no transform
 
     filter_ = op.normal_preconditioner()
 
