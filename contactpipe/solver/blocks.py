@@ -93,9 +93,8 @@ class BlockOperator:
         for s, r in zip(xhat, rhat):
             if s is None:
                 continue
-            whole = np.vdot(s, r)                              # Σ conj(x̂) r̂
-            edges = np.vdot(s[:, 0], r[:, 0]) + np.vdot(s[:, last], r[:, last])
-            total += 2.0 * whole.real - edges.real
+            total += 2.0 * _real_dot(s, r) - _real_dot(s[:, 0], r[:, 0]) \
+                - _real_dot(s[:, last], r[:, last])
         return float(total)
 
     def add(self, Ax, rhat, factor=1.0, extra=None):
@@ -105,6 +104,15 @@ class BlockOperator:
             self.conv.inverse_add(rhat[i], factor, None if extra is None else extra[i],
                                   Ax[i])
         return Ax
+
+
+def _real_dot(a, b) -> float:
+    """Re Σ conj(a) b of two complex arrays, as Σ (a_re b_re + a_im b_im) over their
+    float views, without BLAS (OpenBLAS threads long dot products:
+    :func:`contactpipe.solver.ledger.dot`)."""
+    a = np.ascontiguousarray(a).view(np.float64)
+    b = np.ascontiguousarray(b).view(np.float64)
+    return float(np.einsum("i,i->", a.ravel(), b.ravel()))
 
 
 class DirectOperator:

@@ -43,13 +43,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .ledger import Ledger, dot as _dot
+
 #: Levenberg-Marquardt damping of the dual Newton step of :func:`project_rows`, relative
 #: to the Lipschitz constant of the dual's gradient: from the first value (a plain Newton
 #: step, kept where it ascends) up to the last (a gradient step, which always ascends) [1].
 DAMPING = (1e-12, 1e4)
 
-__all__ = ["BlockSums", "BoxResult", "ComponentSums", "Constraints", "box_cg", "fista",
-           "project_box_sum", "project_rows", "box_jacobian", "box_project", "disk_jacobian",
+__all__ = ["BlockSums", "BoxResult", "ComponentSums", "Constraints", "box_cg",
+           "feasible_start", "fista", "project_box_sum", "project_rows", "box_jacobian", "box_project", "disk_jacobian",
            "disk_project"]
 
 
@@ -64,6 +66,7 @@ class BoxResult:
     residual: float        # last relative change Σ|Δx| / scale
     converged: bool
     pending: np.ndarray | None = None   # with ``defer``: Ax is A (x − pending)
+    after: np.ndarray | None = None     # ``follow``'s point, whose product Ax is
 
 
 class Constraints:
@@ -412,13 +415,6 @@ def _project_cells(x, cells, kind, lo, hi, rho):
         x[:, cells] = disk_project(x[:, cells], rho[cells])[0]
     return x
 
-def _dot(a, b) -> float:
-    """Inner product of two fields of one shape, without BLAS: OpenBLAS threads a long
-    ddot, which on a busy 2-core machine made a 256² fretting loop 4x slower (15.7 s
-    against 3.9 s)."""
-    return float(np.einsum("i,i->", a.ravel(), b.ravel()))
-
-
 def _shift_root(xs, ls, hs, need):
     """c with Σ clip(xs + c, ls, hs) = need (clipped to the attainable range).
 
@@ -504,6 +500,14 @@ def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0, Ax0_of=None):
     if changed:
         return x, apply(x)
     return x, (Ax0 if factor == 1.0 else Ax0 * factor)
+
+
+def feasible_start(x0, lo, hi, target, restore="scale"):
+    """The start :func:`box_cg` makes of x0: clipped to its bounds and the force (or the
+    rows) restored as ``restore`` says. A caller that hands box_cg this, with its A x,
+    spends no product on the start."""
+    con = target if isinstance(target, Constraints) else None
+    return _restored(x0, lo, hi, target, restore, con, lo < hi)[0]
 
 
 def _restored(x0, lo, hi, target, restore, con, movable):
@@ -630,7 +634,7 @@ def _precondition(M, gr, working, con):
 
 def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
            scale=None, Ax0=None, precondition=None, Ax0_of=None,
-           update=False, defer=0.0) -> BoxResult:
+           update=False, defer=0.0, follow=None) -> BoxResult:
     """Solve the bound- and force-constrained quadratic problem described in the module doc.
 
     Parameters
@@ -664,13 +668,12 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         ``A x0`` if already known (saves one FFT pair).
     Ax0_of : ndarray, optional
         The x that ``Ax0`` belongs to, if not ``x0`` (A x then updated: :func:`_start`).
-    update : bool
-        A x after a projection updated, A x_new + A (x_projected − x_new), not recomputed:
-        it pays where ``apply`` skips zero blocks (the joint solve's clipped shear steps).
-    defer : float
-        With ``update``: projections that move x by less than ``defer`` x ``tol`` in all
-        leave their products out of A x (:class:`_Deferred`); what is left out comes back
-        in ``BoxResult.pending`` (A x = A (x − pending)). 0: A x always exact.
+    update, defer, follow :
+        A x after a projection updated, not recomputed (:class:`~.ledger.Ledger`); with
+        ``update``, projections that move x by less than ``defer`` x ``tol`` in all leave
+        their products out of A x, returned in ``BoxResult.pending`` (A x = A (x −
+        pending); 0: A x always exact); ``follow(x) -> x′`` or None where it converges:
+        A x is then x′'s (``BoxResult.after``), and so are the multipliers.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -693,8 +696,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     t = np.zeros_like(x)            # preallocated: the element-wise work runs in place
     g, gr, grw, step, x_new = (np.empty_like(x) for _ in range(5))
     G_old, working_old, err, lam = 1.0, None, np.inf, 0.0 if con is None else np.zeros(con.m)
-    deferred, it = _Deferred(defer * tol), 0
-    halves, rhat = update and hasattr(apply, "spectra"), None
+    book, it = Ledger(apply, update, defer * tol, follow), 0
     for it in range(1, max_iter + 1):
         np.add(Ax, b, out=g)
         free = bounds.free(x)
@@ -722,7 +724,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             t += z
         G_old = max(G, 1e-300)
         working_old = working
-        r, rhat, denom = _curvature(apply, t, halves, rhat)
+        r, denom = book.curvature(t)
         if denom <= 0.0:
             err = 0.0
             break
@@ -733,45 +735,21 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             norm = max(float(np.abs(projected).sum()), 1e-300) if relative else scale
             err = _change(projected, x, norm)
             if update:                          # A x += A(−τ t + d), d the correction
-                _advance(apply, Ax, r, rhat, tau, step,
-                         deferred.take(np.subtract(projected, x_new, out=x_new), norm))
+                book.advance(Ax, r, tau, step, projected, err < tol,
+                             np.subtract(projected, x_new, out=x_new), norm)
             x, Ax = projected, (Ax if update else apply(projected))
         else:                                   # x_new − x = −τ t exactly
             err = _step_change(tau, t, x_new, None if relative else scale, step)
             x, x_new = x_new, x
-            _advance(apply, Ax, r, rhat, tau, step)
+            book.advance(Ax, r, tau, step, x, err < tol)
         if not err >= 0.0:                      # NaN: the iterate is lost
             err = np.inf
             break
         if err < tol:
             break
     res = _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
-    res.pending = deferred.pending
+    res.pending, res.after = book.deferred.pending, book.after
     return res
-
-
-def _curvature(apply, t, halves, rhat):
-    """(A t or None, its spectra or None, tᵀA t): in halves (``halves``, ``apply`` a
-    :class:`~contactpipe.solver.blocks.BlockOperator`) tᵀA t from t's spectra by
-    Parseval's theorem, A t left in spectra (``rhat``, reused) for :func:`_fold`."""
-    if halves:
-        that = apply.spectra(t)
-        rhat = apply.product(that, out=rhat)
-        return None, rhat, apply.inner(that, rhat)
-    r = apply(t)
-    return r, None, _dot(r, t)
-
-
-def _advance(apply, Ax, r, rhat, tau, buf, d=None):
-    """A x += A(−τ t + d) in place, d the projection's correction (None: none): from A t's
-    spectra ``rhat`` through one set of inverse transforms, d costing its forward
-    transforms only; else from A t = ``r`` and a product of d."""
-    if rhat is not None:
-        apply.add(Ax, rhat, -tau, None if d is None else apply.product(apply.spectra(d)))
-        return
-    Ax -= np.multiply(r, tau, out=buf)
-    if d is not None:
-        Ax += apply(d)
 
 
 def _step_change(tau, t, x_new, scale, buf) -> float:
@@ -783,32 +761,6 @@ def _step_change(tau, t, x_new, scale, buf) -> float:
     if moved_by == 0.0:
         return 0.0
     return moved_by / max(float(np.abs(x_new, out=buf).sum()), 1e-300)
-
-
-class _Deferred:
-    """The products of projections that :func:`box_cg` (``defer``) leaves out of A x:
-    while their changes, summed relative to the iterate as the convergence measure is,
-    stay within ``limit``, the differences wait in ``pending``; the next projection
-    beyond it takes them into its own product."""
-
-    def __init__(self, limit):
-        self.limit, self.lag, self.pending = limit, 0.0, None
-
-    def take(self, d, norm):
-        """d kept (None returned) while the changes summed stay within the limit, else d
-        with what waits (the caller adds its product); ``norm`` the convergence measure's
-        normaliser (the scale, or Σ|x| of the projected iterate)."""
-        if self.limit > 0.0:
-            size = float(np.abs(d).sum()) / norm
-            if self.lag + size <= self.limit:
-                self.lag += size
-                self.pending = d.copy() if self.pending is None else \
-                    np.add(self.pending, d, out=self.pending)
-                return None
-        if self.pending is not None:
-            d = d + self.pending
-            self.lag, self.pending = 0.0, None
-        return d.copy()
 
 
 def _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale) -> BoxResult:

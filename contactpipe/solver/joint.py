@@ -17,8 +17,10 @@ the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and the (−Δ)^
 each block as preconditioner: one operator application is two FFT pairs (two forward
 transforms, four kernel products, two inverse), the preconditioner half of one (two
 fields filtered on the unpadded grid). The operator is applied in halves
-(:class:`~contactpipe.solver.blocks.BlockOperator`): a projection's correction rides on
-the step's inverse transforms, at the cost of its forward transforms.
+(:class:`~contactpipe.solver.blocks.BlockOperator`): a projection's correction, and where
+a pass converges the next pass's start (its slip cells on their moved bound, box_cg's
+``follow``), ride on the step's inverse transforms, at the cost of their forward
+transforms.
 
 Only the bound g = μp is then lagged. A pass moves the slip cells' shear by μ δp and the
 pressure answers through K31 only, so a pass cuts the pressure change by about μβ
@@ -40,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .blocks import BlockOperator
-from .cg import BlockSums, box_cg, disk_project
+from .cg import BlockSums, box_cg, disk_project, feasible_start
 from .disk_cg import PressureBlock, disk_cg, disk_start, restore_rows
 from .tangential import follow_bound, force_rows, multipliers, scalar_multiplier, sliding
 
@@ -151,11 +153,14 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     p, s = np.array(p0, dtype=float), np.array(q0, dtype=float) / mu
     lag_old, Ax, its, plan = None, None, 0, _Schedule(tol)
     pending = None          # the last pass's projections not yet in its A x
+    start = None            # the next pass's start, whose product Ax is (a fold)
     for passes in range(1, max_passes + 1):
         lag = p                                   # the bound of s: |s| <= p (lagged)
         lo, hi = np.stack([zero, -lag]), np.stack([inf, lag])
-        Ax_of = None
-        if lag_old is not None:                   # slip cells stay on their moved bound
+        Ax_of = start
+        if start is not None:
+            s = start[1]
+        elif lag_old is not None:                 # slip cells stay on their moved bound
             moved = follow_bound(s, lag_old, lag)
             if not np.array_equal(moved, s) or pending is not None:
                 # A x of the moved start, updated by the shear block alone (1.5 FFT pairs
@@ -164,16 +169,31 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                 Ax_of, s = np.stack([p, s]), moved
                 if pending is not None:
                     Ax_of -= pending
+        end = {}
+
+        def follow(x, lag=lag, end=end):
+            """The converged pass's (p, s) -> the next pass's start (the slip cells on
+            their moved bound, the rows restored as box_cg would), or None after the
+            last pass."""
+            end["settled"] = plan.settled(x[0], lag, W, cell_area)
+            if end["settled"]:
+                return None
+            p_new = x[0]
+            moved = np.stack([p_new, follow_bound(x[1], lag, p_new)])
+            return feasible_start(moved, np.stack([zero, -p_new]), np.stack([inf, p_new]),
+                                  rows, "shift")
+
         res = box_cg(apply, b, lo, hi, rows, np.stack([p, s]), tol=plan.inner,
                      max_iter=max_iter, restore="shift", Ax0=Ax, precondition=precondition,
-                     Ax0_of=Ax_of, update=True, defer=DEFER)
+                     Ax0_of=Ax_of, update=True, defer=DEFER, follow=follow)
         pending = res.pending
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
                                res.residual)
-        settled = plan.settled(res.x[0], p, W, cell_area)
-        p, s, Ax = res.x[0], res.x[1], res.Ax
+        settled = end["settled"] if "settled" in end else plan.settled(res.x[0], p, W,
+                                                                        cell_area)
+        p, s, Ax, start = res.x[0], res.x[1], res.Ax, res.after
         lag_old = lag
         if settled:
             omega3 = float(res.multiplier[0])
