@@ -5,8 +5,8 @@ A projected CG step x → P(x − τ t) changes A x by A(P(x − τ t) − x) = 
 the projection's correction. Applied whole, that costs one product for t (its curvature
 tᵀA t sets τ) and a second for d. In halves, tᵀA t comes from t's spectra by Parseval's
 theorem (:meth:`BlockOperator.inner`) and A x takes the step's and the correction's
-spectra summed through one set of inverse transforms: the correction costs its forward
-transforms only (half a pair per moved field instead of a pair per field and output).
+spectra summed through one set of inverse transforms: the correction costs one forward
+transform per moved field and no inverse.
 The CG's next start (the next coupling pass's, or the instant's final state) is folded
 into the last step the same way (:func:`contactpipe.solver.disk_cg.disk_cg`,
 ``follow``).
