@@ -231,7 +231,7 @@ def test_a_cell_turning_too_far_has_its_own_step_shortened():
     short = disk_cg.shortened(t, 1.0, rho, turning)
     np.testing.assert_allclose(short[0, :2], [disk_cg.SPIN / 2.0, 1.0], rtol=1e-14)
     assert np.all(short[stick] == 1.0)
-    x_new, d, err, size = disk_cg._step(x, 1.0, t, rho, Constraints.none((2, n, n)),
+    x_new, d, err, norm = disk_cg._step(x, 1.0, t, rho, Constraints.none((2, n, n)),
                                         (rho > 0, stick, turning), None, 1.0, short)
     angle = np.arctan2(x_new[1], x_new[0])
     assert angle[0, 0] == pytest.approx(np.arctan(disk_cg.SPIN), rel=1e-12)
@@ -240,5 +240,5 @@ def test_a_cell_turning_too_far_has_its_own_step_shortened():
     np.testing.assert_allclose(x_new[:, stick], -0.01, rtol=1e-12)
     # the correction is what the projection added to the plain step x − τ t
     np.testing.assert_allclose(d, x_new - (x - t), rtol=0, atol=1e-15)
-    assert size == pytest.approx(np.abs(d).sum(), rel=1e-14)
-    assert err == pytest.approx(np.abs(x_new - x).sum(), rel=1e-14)
+    assert norm == 1.0                                   # the sizes over the given scale
+    assert err == pytest.approx(np.abs(x_new - x).sum() / norm, rel=1e-14)

@@ -51,8 +51,8 @@ from .ledger import Ledger, dot as _dot
 DAMPING = (1e-12, 1e4)
 
 __all__ = ["BlockSums", "BoxResult", "ComponentSums", "Constraints", "box_cg",
-           "feasible_start", "fista", "project_box_sum", "project_rows", "box_jacobian", "box_project", "disk_jacobian",
-           "disk_project"]
+           "feasible_start", "fista", "project_box_sum", "project_rows", "box_jacobian",
+           "box_project", "disk_jacobian", "disk_project"]
 
 
 @dataclass
@@ -673,7 +673,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         ``update``, projections that move x by less than ``defer`` x ``tol`` in all leave
         their products out of A x, returned in ``BoxResult.pending`` (A x = A (x −
         pending); 0: A x always exact); ``follow(x) -> x′`` or None where it converges:
-        A x is then x′'s (``BoxResult.after``), and so are the multipliers.
+        A x is then x′'s (``BoxResult.after``), the multipliers fitted to it.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -695,7 +695,8 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         scale = max(abs(target), 1e-300)
     t = np.zeros_like(x)            # preallocated: the element-wise work runs in place
     g, gr, grw, step, x_new = (np.empty_like(x) for _ in range(5))
-    G_old, working_old, err, lam = 1.0, None, np.inf, 0.0 if con is None else np.zeros(con.m)
+    G_old, working_old, err = 1.0, None, np.inf
+    lam = 0.0 if con is None else np.zeros(con.m)
     book, it = Ledger(apply, update, defer * tol, follow), 0
     for it in range(1, max_iter + 1):
         np.add(Ax, b, out=g)
@@ -747,6 +748,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             break
         if err < tol:
             break
+    Ax = book.close(x, Ax, err < tol)
     res = _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
     res.pending, res.after = book.deferred.pending, book.after
     return res

@@ -326,7 +326,7 @@ class _Instant:
         if not j.converged:
             return None
         if self.vector:
-            q, u_t, domega = finish_vector(op, j, mu, b[1:], self.T, self.cell)
+            q, u_t, domega = finish_vector(j, b[1:], self.T, self.cell)
         else:
             q = np.zeros_like(prev.q)
             q[0], u_t, domega1 = finish(op, j, mu, b[1])

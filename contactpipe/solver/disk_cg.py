@@ -51,6 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cg import BlockSums, disk_project, project_rows
+from .ledger import Ledger
 
 __all__ = ["BAND_GATE", "CURVATURE_SHIFT", "DiskResult", "LAG", "LOW_BAND",
            "PressureBlock", "SNAP", "SPIN", "STALL", "curvature", "curved", "direction",
@@ -330,9 +331,9 @@ def _step(x, tau, t, rho, con, cells, pressure, scale, short=None):
     cell that would turn too far moved by τ ``short`` t only (``short`` per cell, 1 where
     the step is whole; None: none), stick cells pushed past their disk projected
     radially, turning cells put back on their circles, the rows restored.
-    Returns (x_new, d, the step's size, the correction's size): d = x_new − (x − τ t)
-    the projection's correction (None where nothing moved), sizes relative (Σ|·| over
-    ``scale``, or over Σ|x_new| where it is None)."""
+    Returns (x_new, d, the step's size, its normaliser): d = x_new − (x − τ t) the
+    projection's correction (None where nothing moved), the size relative (Σ|x_new − x|
+    over the normaliser: ``scale``, or Σ|x_new| where it is None)."""
     movable, stick, turning = cells
     x_new = x - tau * t
     s = x_new[-2:] if short is None else x[-2:] - (tau * short) * t[-2:]
@@ -351,10 +352,9 @@ def _step(x, tau, t, rho, con, cells, pressure, scale, short=None):
         scale = max(float(np.abs(x_new).sum()), 1e-300)
     err = _change(x_new, x, scale)
     if not projected:
-        return x_new, None, err, 0.0
+        return x_new, None, err, scale
     d = x_new - stepped
-    size = float(np.abs(d).sum()) / scale
-    return x_new, (d if size > 0.0 else None), err, size
+    return x_new, (d if d.any() else None), err, scale
 
 
 def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure):
@@ -392,13 +392,6 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure)
         z[0] = pressure.direction(M, gr[0], work)
         sets, entered = sets + (work,), entered or back
     return gr, gt, z, curv, qhat, (movable, stick, turning), sets, entered, lam
-
-
-def _summed(a, b):
-    """a + b where either may be None (nothing)."""
-    if a is None:
-        return b
-    return a if b is None else a + b
 
 
 def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
@@ -457,9 +450,7 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
     rz_old, sets_old = 1.0, None
     err, best, best_it = np.inf, np.inf, 0
     lam = np.zeros(con.m)
-    lag, pending = 0.0, None      # corrections not yet in A x, summed, relative [1]
-    after, it = None, 0
-    rhat = None                   # the step's spectra, reused
+    book, it = Ledger(A, True, LAG * tol, follow, exact), 0
     for it in range(1, max_iter + 1):
         if it - best_it > STALL:    # no progress: leave it to the caller's fallback
             break
@@ -474,40 +465,30 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
                  or not all(np.array_equal(a, c) for a, c in zip(sets, sets_old)))
         t = z if reset else _conjugate(t, z, rz, rz_old, gr, qhat, turning)
         rz_old, sets_old = rz, sets
-        that = A.spectra(t)
-        rhat = A.product(that, out=rhat)                   # A t's spectra
-        denom = curved(A.inner(that, rhat), t, curv)
+        denom = curved(book.curvature(t)[1], t, curv)
         if denom <= 0.0:
             err = 0.0
             break
         tau = float(np.sum(gr * t)) / denom
         short = shortened(t, tau, rho_safe, turning)
-        x_new, d, err, size = _step(x, tau, t, rho, con, cells, pressure, scale, short)
+        x_new, d, err, norm = _step(x, tau, t, rho, con, cells, pressure, scale, short)
         if not err >= 0.0:      # NaN: the iterate is lost
             err = np.inf
             break
-        done = err < tol
-        if d is not None and not done and lag + size <= LAG * tol:
-            lag, pending, d = lag + size, _summed(pending, d), None
-        elif d is not None or (done and (exact or follow is not None)):
-            d, lag, pending = _summed(d, pending), 0.0, None
-        if done and follow is not None:
-            after = follow(x_new)
-            d = _summed(d, after - x_new)
-        A.add(Ax, rhat, -tau, A.product(A.spectra(d)) if d is not None and d.any()
-              else None)                                    # A x += A(−τ t + d)
+        book.advance(Ax, None, tau, None, x_new, err < tol, d, norm)   # A x += A(−τ t + d)
         x = x_new
-        if done:
+        if err < tol:
             break
         if err < 0.5 * best:
             best, best_it = err, it
-    return _result(A, x, Ax, rho, con, pressure, err, tol, it, pending, after, follow, exact)
+    return _result(book, x, Ax, rho, con, pressure, err, tol, it)
 
 
-def _result(A, x, Ax, rho, con, pressure, err, tol, it, pending, after, follow, exact):
+def _result(book, x, Ax, rho, con, pressure, err, tol, it):
     """:func:`disk_cg`'s result: converged where the last step and the rows' miss are
     within tol; a converged solve that took no step to fold its end into (no descent was
-    left) moves to ``follow``'s point, or takes in what it left out, by one product."""
+    left) moves to ``follow``'s point, or takes in what it left out, by one product
+    (:meth:`~contactpipe.solver.ledger.Ledger.close`)."""
     miss = float(np.abs(con.residual(x[-2:])).max(initial=0.0)) / max(float(rho.sum()),
                                                                       1e-300)
     if pressure is not None:
@@ -515,12 +496,5 @@ def _result(A, x, Ax, rho, con, pressure, err, tol, it, pending, after, follow, 
                                                                          1e-300))
     err = max(float(err), miss)
     ok = bool(err < tol) and bool(np.all(np.isfinite(x)))
-    if ok and after is None and (follow is not None or (exact and pending is not None)):
-        nxt = x if follow is None else follow(x)
-        d = _summed(nxt - x, pending)
-        pending = None
-        if d.any():
-            Ax += A(d)
-        if follow is not None:
-            after = nxt
-    return DiskResult(x, Ax, pending, it, err, ok, after)
+    Ax = book.close(x, Ax, ok)
+    return DiskResult(x, Ax, book.deferred.pending, it, err, ok, book.after)

@@ -151,24 +151,11 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     rows = BlockSums([W / cell_area, T1 / cell_area / mu])
     zero, inf = np.zeros_like(p0), np.full_like(p0, np.inf)
     p, s = np.array(p0, dtype=float), np.array(q0, dtype=float) / mu
-    lag_old, Ax, its, plan = None, None, 0, _Schedule(tol)
-    pending = None          # the last pass's projections not yet in its A x
-    start = None            # the next pass's start, whose product Ax is (a fold)
+    # a pass's start: from the second pass on, box_cg's ``follow``'s, whose product Ax is
+    x, Ax, its, plan = np.stack([p, s]), None, 0, _Schedule(tol)
     for passes in range(1, max_passes + 1):
         lag = p                                   # the bound of s: |s| <= p (lagged)
         lo, hi = np.stack([zero, -lag]), np.stack([inf, lag])
-        Ax_of = start
-        if start is not None:
-            s = start[1]
-        elif lag_old is not None:                 # slip cells stay on their moved bound
-            moved = follow_bound(s, lag_old, lag)
-            if not np.array_equal(moved, s) or pending is not None:
-                # A x of the moved start, updated by the shear block alone (1.5 FFT pairs
-                # instead of 2 for a new product; the start's force rows move s only),
-                # and by what the last pass left out of it
-                Ax_of, s = np.stack([p, s]), moved
-                if pending is not None:
-                    Ax_of -= pending
         end = {}
 
         def follow(x, lag=lag, end=end):
@@ -183,27 +170,23 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
             return feasible_start(moved, np.stack([zero, -p_new]), np.stack([inf, p_new]),
                                   rows, "shift")
 
-        res = box_cg(apply, b, lo, hi, rows, np.stack([p, s]), tol=plan.inner,
-                     max_iter=max_iter, restore="shift", Ax0=Ax, precondition=precondition,
-                     Ax0_of=Ax_of, update=True, defer=DEFER, follow=follow)
-        pending = res.pending
+        res = box_cg(apply, b, lo, hi, rows, x, tol=plan.inner, max_iter=max_iter,
+                     restore="shift", Ax0=Ax, precondition=precondition, Ax0_of=x,
+                     update=True, defer=DEFER, follow=follow)
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
                                res.residual)
-        settled = end["settled"] if "settled" in end else plan.settled(res.x[0], p, W,
-                                                                        cell_area)
-        p, s, Ax, start = res.x[0], res.x[1], res.Ax, res.after
-        lag_old = lag
-        if settled:
+        p, s, Ax, x = res.x[0], res.x[1], res.Ax, res.after
+        if end["settled"]:
             omega3 = float(res.multiplier[0])
-            if pending is not None:               # the product made exact at the end
-                Ax = Ax + apply(pending)
+            if res.pending is not None:           # the product made exact at the end
+                Ax = Ax + apply(res.pending)
                 omega3 = float(rows.fit(Ax + b, (res.x > lo) & (res.x < hi))[0])
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
             return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True,
                                plan.change)
-    return JointResult(p, mu * s, mu * lag_old, np.nan, Ax, its, max_passes, False,
+    return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, max_passes, False,
                        plan.change)
 
 
@@ -367,19 +350,15 @@ def _final_shear(s, lag, p, con):
     return restore_rows(s, p, con, (p > 0) & (mag < p * (1.0 - 1e-12)))
 
 
-def finish_vector(op, j: JointResult, mu, b12, T, cell_area):
+def finish_vector(j: JointResult, b12, T, cell_area):
     """The vector joint solution's shear, displacement and rigid shift: the solve already
     put the shear on the bound of its own final pressure (:func:`_final_shear`, folded
     into its last step), so this only reorders the kept products and fits the multipliers.
 
     Parameters
     ----------
-    op : ContactOperator
-        Unused: the products were kept (the argument matches :func:`finish`'s).
     j : JointResult
         A converged :func:`solve_joint_vector`.
-    mu : float
-        [1]
     b12 : ndarray (2, N1, N2)
         U − u(k−1) in the plane [m].
     T : array_like (2,)

@@ -1,4 +1,5 @@
-"""How :func:`contactpipe.solver.cg.box_cg` keeps A x in step with its iterate.
+"""How the CGs (:func:`contactpipe.solver.cg.box_cg`,
+:func:`contactpipe.solver.disk_cg.disk_cg`) keep A x in step with their iterate.
 
 A step x → P(x − τ t) changes A x by −τ A t + A d, d the projection's correction. With a
 plain product ``apply`` that is A t (one product, which also gives the line search's
@@ -55,7 +56,8 @@ class Deferred:
 
 
 class Ledger:
-    """A x's bookkeeping for one box_cg solve.
+    """A x's bookkeeping for one CG solve (:func:`contactpipe.solver.cg.box_cg`,
+    :func:`contactpipe.solver.disk_cg.disk_cg`).
 
     Parameters
     ----------
@@ -65,14 +67,17 @@ class Ledger:
     limit : float
         The deferred corrections' budget (:class:`Deferred`), relative [1].
     follow : callable, optional
-        ``follow(x) -> x′`` or None, called once where the solve converges after a step
-        (in halves only): x′ takes the step's place in A x (``after``).
+        ``follow(x) -> x′`` or None, called once, on the iterate where the solve
+        converges: x′ takes x's place in A x (``after``), with what waited.
+    exact : bool
+        Where the solve converges, what waited is taken in all the same.
     """
 
-    def __init__(self, apply, update, limit, follow=None):
-        self.apply, self.follow = apply, follow
+    def __init__(self, apply, update, limit, follow=None, exact=False):
+        self.apply, self.update, self.follow, self.exact = apply, update, follow, exact
         self.halves = update and hasattr(apply, "spectra")
         self.deferred, self.after, self._rhat = Deferred(limit), None, None
+        self.ended = False
 
     def curvature(self, t):
         """(A t, or None in halves where it stays in spectra; tᵀA t)."""
@@ -87,16 +92,11 @@ class Ledger:
     def advance(self, Ax, r, tau, buf, x, done, d=None, norm=None):
         """A x += A(−τ t + d) in place, for the iterate x the step reached: d the
         projection's correction (None: none), kept back while small; where the solve ends
-        here (``done``) and ``follow`` moves it, d grows by the move and by what waited."""
+        here (``done``), d takes in :meth:`_end`'s move."""
         if d is not None:
             d = self.deferred.take(d, norm)
-        if done and self.halves and self.follow is not None:
-            nxt = self.follow(x)
-            if nxt is not None:
-                self.after = nxt
-                for extra in (self.deferred.flush(), nxt - x):
-                    if extra is not None:
-                        d = extra if d is None else d + extra
+        if done:
+            d = self._end(x, d)
         apply = self.apply
         if self.halves:
             apply.add(Ax, self._rhat, -tau,
@@ -105,3 +105,27 @@ class Ledger:
         Ax -= np.multiply(r, tau, out=buf)
         if d is not None:
             Ax += apply(d)
+
+    def close(self, x, Ax, converged):
+        """A solve that converged without a step to fold its end into (no descent was
+        left): :meth:`_end`'s move by one product. Returns A x."""
+        if converged and not self.ended:
+            d = self._end(x, None)
+            if d is not None and d.any():
+                Ax += self.apply(d)
+        return Ax
+
+    def _end(self, x, d):
+        """d grown, at the converged iterate x, by ``follow``'s move and, where it moves
+        or with ``exact``, by what waited."""
+        self.ended = True
+        if not self.update:
+            return d
+        nxt = self.follow(x) if self.follow is not None else None
+        if nxt is None and not self.exact:
+            return d
+        self.after = nxt
+        for extra in (self.deferred.flush(), None if nxt is None else nxt - x):
+            if extra is not None:
+                d = extra if d is None else d + extra
+        return d
