@@ -293,17 +293,27 @@ def test_follow_bound_puts_slip_cells_on_the_new_bound():
     assert np.array_equal(out[0][~slip], q[0][~slip])
 
 
-def _last_pending(monkeypatch):
-    """Wrap the joint solve's box_cg: a list that records, per call, whether it returned
-    projections left out of its A x."""
-    seen, real = [], joint.box_cg
+def _folded(monkeypatch):
+    """Wrap the joint solve's box_cg and the ledger's hand-over of deferred products: a
+    list that records, per box_cg call, whether it returned projections left out of its
+    A x, and whether deferred products were handed over to be folded into a step."""
+    from contactpipe.solver import ledger
+    seen, real, flush = [], joint.box_cg, ledger.Deferred.flush
+    folded = []
 
     def recorded(*a, **k):
+        folded.clear()
         res = real(*a, **k)
-        seen.append(res.pending is not None)
+        seen.append((res.pending is not None, any(folded)))
         return res
 
+    def handed(self):
+        out = flush(self)
+        folded.append(out is not None)
+        return out
+
     monkeypatch.setattr(joint, "box_cg", recorded)
+    monkeypatch.setattr(ledger.Deferred, "flush", handed)
     return seen
 
 
@@ -333,8 +343,8 @@ def test_deferred_projection_products_give_the_same_answer(monkeypatch):
 def test_joint_solve_ends_with_an_exact_product(monkeypatch):
     """The bookkeeping of deferred products, pushed to its extreme: every projection's
     product deferred (DEFER = 1e300; steel on aluminium, 32², the Spence shear of W alone
-    at tolerance 1e-6, where the last pass too ends with some left out). The result's A x
-    is still the product of its own (p, q1) to 1e-13, as with DEFER = 0, and ω3 is the
+    at tolerance 1e-6, where the last pass too ends with some left out, folded into its
+    last step). The result's A x is still the product of its own (p, q1) to 1e-13, as with DEFER = 0, and ω3 is the
     mean of the exact gap over the contact cells (its multiplier) to 1e-12. (The answer
     itself is compared at the default DEFER, above: a search that never sees its
     projections is not the solver's.)"""
@@ -346,11 +356,11 @@ def test_joint_solve_ends_with_an_exact_product(monkeypatch):
     k = op.k
     for defer in (0.0, 1e300):
         monkeypatch.setattr(joint, "DEFER", defer)
-        seen = _last_pending(monkeypatch)
+        seen = _folded(monkeypatch)
         j = joint.solve_joint(op, b, W, 0.0, cell, MU, start, np.zeros_like(gap), 1e-6,
                               2000, 100)
         assert j.converged
-        assert seen[-1] == (defer > 0)
+        assert seen[-1] == (False, defer > 0)
         exact = op.conv.convolve_matrix([[k["33"], k["31"]], [k["13"], k["11"]]],
                                         [j.p, j.q])
         assert np.abs(j.Ax - exact).max() <= 1e-13 * np.abs(exact).max()

@@ -634,7 +634,7 @@ def _precondition(M, gr, working, con):
 
 def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
            scale=None, Ax0=None, precondition=None, Ax0_of=None,
-           update=False, defer=0.0, follow=None) -> BoxResult:
+           update=False, defer=0.0, follow=None, exact=False) -> BoxResult:
     """Solve the bound- and force-constrained quadratic problem described in the module doc.
 
     Parameters
@@ -668,12 +668,12 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         ``A x0`` if already known (saves one FFT pair).
     Ax0_of : ndarray, optional
         The x that ``Ax0`` belongs to, if not ``x0`` (A x then updated: :func:`_start`).
-    update, defer, follow :
-        A x after a projection updated, not recomputed (:class:`~.ledger.Ledger`); with
-        ``update``, projections that move x by less than ``defer`` x ``tol`` in all leave
-        their products out of A x, returned in ``BoxResult.pending`` (A x = A (x −
-        pending); 0: A x always exact); ``follow(x) -> x′`` or None where it converges:
-        A x is then x′'s (``BoxResult.after``), the multipliers fitted to it.
+    update, defer, follow, exact :
+        A x updated, not recomputed (:class:`~.ledger.Ledger`): projections moving x by
+        less than ``defer`` x ``tol`` in all wait, in ``BoxResult.pending`` (A x = A (x −
+        pending)) unless ``exact`` folds them into the converged last step;
+        ``follow(x) -> x′`` or None where it converges: A x is then x′'s
+        (``BoxResult.after``), the multipliers fitted to it.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
@@ -697,7 +697,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     g, gr, grw, step, x_new = (np.empty_like(x) for _ in range(5))
     G_old, working_old, err = 1.0, None, np.inf
     lam = 0.0 if con is None else np.zeros(con.m)
-    book, it = Ledger(apply, update, defer * tol, follow), 0
+    book, it = Ledger(apply, update, defer * tol, follow, exact), 0
     for it in range(1, max_iter + 1):
         np.add(Ax, b, out=g)
         free = bounds.free(x)

@@ -172,7 +172,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
 
         res = box_cg(apply, b, lo, hi, rows, x, tol=plan.inner, max_iter=max_iter,
                      restore="shift", Ax0=Ax, precondition=precondition, Ax0_of=x,
-                     update=True, defer=DEFER, follow=follow)
+                     update=True, defer=DEFER, follow=follow, exact=True)
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
@@ -180,9 +180,6 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         p, s, Ax, x = res.x[0], res.x[1], res.Ax, res.after
         if end["settled"]:
             omega3 = float(res.multiplier[0])
-            if res.pending is not None:           # the product made exact at the end
-                Ax = Ax + apply(res.pending)
-                omega3 = float(rows.fit(Ax + b, (res.x > lo) & (res.x < hi))[0])
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
             return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True,
                                plan.change)
