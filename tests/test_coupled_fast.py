@@ -484,7 +484,9 @@ def test_scalar_joint_steps_fold_their_projection_products(monkeypatch):
     plain callable; steel on aluminium, 32², T = 0.5 μW, tolerance 1e-10) it reaches the
     same (p, q1) (measured 1.8e-14 and 1.1e-14 of p's largest and μ times it; bound 1e-9)
     in as many iterations (18, 5 passes), for fewer FFT pairs (measured 52 against 60),
-    and spends two inverse transforms per iteration and two for its first A x."""
+    and spends two inverse transforms per iteration and two for its first A x: the final
+    state, q1 on its own pressure's bound, rides on the last step too, and A x is the
+    product of that (p, q1) to 1e-13 of its largest."""
     from contactpipe.solver.normal import solve_normal
     from test_coupling import ALUMINIUM as AL, STEEL, W, instant
     op, gap, U, cell, _, _ = instant(STEEL, AL)
@@ -500,6 +502,11 @@ def test_scalar_joint_steps_fold_their_projection_products(monkeypatch):
 
     halves, halves_pairs, inverse = run()
     assert inverse == 2 * (halves.iterations + 1)
+    np.testing.assert_array_equal(halves.bound, MU * halves.p)   # its own pressure's bound
+    k = op.k
+    exact = op.conv.convolve_matrix([[k["33"], k["31"]], [k["13"], k["11"]]],
+                                    [halves.p, halves.q])
+    assert np.abs(halves.Ax - exact).max() <= 1e-13 * np.abs(exact).max()
     monkeypatch.setattr(joint, "BlockOperator", lambda conv, blocks: (
         lambda x, out=None: conv.convolve_matrix(blocks, [f if f.any() else None
                                                           for f in x], out=out)))

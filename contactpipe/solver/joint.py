@@ -67,9 +67,10 @@ DEFER = 0.1
 @dataclass
 class JointResult:
     p: np.ndarray           # (N1, N2) pressure [Pa]
-    q: np.ndarray           # shear [Pa] within the bound of the last pass: (N1, N2) q1
-                            # of the scalar form, (2, N1, N2) q of the vector form
-    bound: np.ndarray       # (N1, N2) that bound, μ p of the pass before [Pa]
+    q: np.ndarray           # shear [Pa] within ``bound``: (N1, N2) q1 of the scalar
+                            # form, (2, N1, N2) q of the vector form
+    bound: np.ndarray       # (N1, N2) μ p of its own pressure where converged (the
+                            # shear's slip cells on it), else the last pass's bound [Pa]
     omega3: float           # normal approach [m] (the p row's multiplier)
     Ax: np.ndarray          # (u3, u1) = (K33 p + K31 q1, K13 p + K11 q1) [m], or
                             # (u3, u1, u2) from (p, q) for the vector form
@@ -128,7 +129,9 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     Returns
     -------
     JointResult
-        ``converged`` False when a solve stopped or the passes did not settle.
+        ``q`` on the final bound ``bound`` = μ p (the last pass's end folded into its
+        last step), ``Ax`` (u3, u1) of (p, q1); ``converged`` False when a solve stopped
+        or the passes did not settle.
     """
     conv, k = op.conv, op.k
     # the shear is solved as s = q1 / μ, of the pressure's size, so that the stacked
@@ -160,12 +163,14 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
 
         def follow(x, lag=lag, end=end):
             """The converged pass's (p, s) -> the next pass's start (the slip cells on
-            their moved bound, the rows restored as box_cg would), or None after the
-            last pass."""
+            their moved bound, the rows restored as box_cg would), or after the last
+            pass the instant's final state (the shear on its own pressure's bound, as
+            :func:`finish` puts it; None where it is there already)."""
             end["settled"] = plan.settled(x[0], lag, W, cell_area)
-            if end["settled"]:
-                return None
             p_new = x[0]
+            if end["settled"]:
+                s_end = np.clip(follow_bound(x[1], lag, p_new), -p_new, p_new)
+                return None if np.array_equal(s_end, x[1]) else np.stack([p_new, s_end])
             moved = np.stack([p_new, follow_bound(x[1], lag, p_new)])
             return feasible_start(moved, np.stack([zero, -p_new]), np.stack([inf, p_new]),
                                   rows, "shift")
@@ -179,29 +184,28 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                                res.residual)
         p, s, Ax, x = res.x[0], res.x[1], res.Ax, res.after
         if end["settled"]:
+            if x is not None:                      # the final state, folded in
+                s = x[1]
             omega3 = float(res.multiplier[0])
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
-            return JointResult(p, mu * s, mu * lag, omega3, Ax, its, passes, True,
+            return JointResult(p, mu * s, mu * p, omega3, Ax, its, passes, True,
                                plan.change)
     return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, max_passes, False,
                        plan.change)
 
 
 def finish(op, j: JointResult, mu, b1):
-    """The joint solution on the bound of its own final pressure, without another solve.
-
-    The last pass held the shear within μ p of the pass before, which differs from the
-    final μ p by less than the tolerance: the slip cells move onto the final bound
-    (:func:`follow_bound`) and a cell beyond it is clipped back, a change of q1 of the
-    tolerance's order (a tangential solve against the final pressure, which this
-    replaces, moved q1 as little and cost about 4 FFT pairs more).
+    """The scalar joint solution's shear, displacement and rigid shift: the solve already
+    put the shear on the bound of its own final pressure (folded into its last step, as
+    :func:`solve_joint_vector` does), so this adds u2, which the one-component CG does
+    not carry, and fits the force row's multiplier.
 
     Parameters
     ----------
     op : ContactOperator
         The instant's operator.
     j : JointResult
-        A converged joint solve.
+        A converged :func:`solve_joint`.
     mu : float
         Friction coefficient [1].
     b1 : ndarray (N1, N2)
@@ -213,26 +217,16 @@ def finish(op, j: JointResult, mu, b1):
         The shear [Pa], |q1| <= μ p with the slip cells on the bound.
     u : ndarray (3, N1, N2)
         The displacement [m] from the tractions (K [q1, 0, p]): the kept products
-        K33 p + K31 q1 and K13 p + K11 q1 mended for the change of q1, and
-        u2 = K21 q1 + K23 p (one block product: 1.5 FFT pairs, 3 when q1 moved).
+        K13 p + K11 q1 and K33 p + K31 q1, and u2 = K21 q1 + K23 p (one block product of
+        two forward transforms and one inverse: 1.5 FFT pairs).
     domega1 : float
         The tangential rigid shift increment Δω1 [m], the force row's multiplier.
     """
     k = op.k
-    bound = mu * j.p
-    q1 = np.clip(follow_bound(j.q, j.bound, bound), -bound, bound)
-    dq = q1 - j.q
-    u = np.empty((3,) + q1.shape)
-    if dq.any():
-        d = op.conv.convolve_matrix([[k["11"], None, None], [None, k["21"], k["23"]],
-                                     [k["31"], None, None]], [dq, q1, j.p])
-        u[0] = j.Ax[1] + d[0]
-        u[1] = d[1]
-        u[2] = j.Ax[0] + d[2]
-    else:
-        u[0], u[2] = j.Ax[1], j.Ax[0]
-        u[1] = op.conv.convolve_matrix([[k["21"], k["23"]]], [q1, j.p])[0]
-    return q1, u, scalar_multiplier(u[0] + b1, q1, bound)
+    u = np.empty((3,) + j.q.shape)
+    u[0], u[2] = j.Ax[1], j.Ax[0]
+    u[1] = op.conv.convolve_matrix([[k["21"], k["23"]]], [j.q, j.p])[0]
+    return j.q, u, scalar_multiplier(u[0] + b1, j.q, j.bound)
 
 
 def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
