@@ -17,9 +17,9 @@ The joint solve: a coupled instant under force control of W and T alone (uniform
 solved instead as one constrained problem over (p, q1) — the scalar form — or (p, q1, q2)
 — the vector form — with only the bound μp lagged between passes
 (:mod:`contactpipe.solver.joint`; from nothing in contact, a normal solve starts it), its
-shear then put on the final pressure's bound (:func:`contactpipe.solver.joint.finish`,
-:func:`~contactpipe.solver.joint.finish_vector`: Coulomb's law exact as after the passes
-above, without another solve): the same answer within the tolerance, in fewer FFT pairs
+shear put on the final pressure's bound by its last step and ended by
+:func:`contactpipe.solver.joint.finish` (:func:`~contactpipe.solver.joint.finish_vector`:
+Coulomb's law exact as after the passes above, without another solve): the same answer within the tolerance, in fewer FFT pairs
 (128²: paper fig. 3 with coupling, scalar form, 159 → 69 pairs per step; steel-on-aluminium
 fretting, vector form, 193 → 154).
 Where it does not converge, or in the vector form where no cell sticks any more, the
@@ -300,7 +300,7 @@ class _Instant:
 
     def joint(self, tol):
         """The instant by :func:`.joint.solve_joint` (:func:`.joint.solve_joint_vector`),
-        its shear put on the final pressure's bound by :func:`.joint.finish`
+        its shear on the final pressure's bound, ended by :func:`.joint.finish`
         (:func:`.joint.finish_vector`); None when the joint solve did not converge (the
         block Gauss-Seidel passes then take over from the start)."""
         prev, U, op, mu = self.prev, self.U, self.op, self.mu
@@ -329,7 +329,7 @@ class _Instant:
             q, u_t, domega = finish_vector(j, b[1:], self.T, self.cell)
         else:
             q = np.zeros_like(prev.q)
-            q[0], u_t, domega1 = finish(op, j, mu, b[1])
+            q[0], u_t, domega1 = finish(op, j, b[1])
             domega = np.array([domega1, 0.0])
         n = NormalResult(j.p, j.omega3, u_t[2], j.iterations, j.residual, True)
         return InstantResult(j.p, q, U + u_t, j.omega3, np.asarray(domega, dtype=float),

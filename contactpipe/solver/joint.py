@@ -168,12 +168,12 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
             :func:`finish` puts it; None where it is there already)."""
             end["settled"] = plan.settled(x[0], lag, W, cell_area)
             p_new = x[0]
+            s_new = follow_bound(x[1], lag, p_new)
             if end["settled"]:
-                s_end = np.clip(follow_bound(x[1], lag, p_new), -p_new, p_new)
-                return None if np.array_equal(s_end, x[1]) else np.stack([p_new, s_end])
-            moved = np.stack([p_new, follow_bound(x[1], lag, p_new)])
-            return feasible_start(moved, np.stack([zero, -p_new]), np.stack([inf, p_new]),
-                                  rows, "shift")
+                np.clip(s_new, -p_new, p_new, out=s_new)
+                return None if np.array_equal(s_new, x[1]) else np.stack([p_new, s_new])
+            return feasible_start(np.stack([p_new, s_new]), np.stack([zero, -p_new]),
+                                  np.stack([inf, p_new]), rows, "shift")
 
         res = box_cg(apply, b, lo, hi, rows, x, tol=plan.inner, max_iter=max_iter,
                      restore="shift", Ax0=Ax, precondition=precondition, Ax0_of=x,
@@ -194,7 +194,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                        plan.change)
 
 
-def finish(op, j: JointResult, mu, b1):
+def finish(op, j: JointResult, b1):
     """The scalar joint solution's shear, displacement and rigid shift: the solve already
     put the shear on the bound of its own final pressure (folded into its last step, as
     :func:`solve_joint_vector` does), so this adds u2, which the one-component CG does
@@ -206,8 +206,6 @@ def finish(op, j: JointResult, mu, b1):
         The instant's operator.
     j : JointResult
         A converged :func:`solve_joint`.
-    mu : float
-        Friction coefficient [1].
     b1 : ndarray (N1, N2)
         U1 − u1(k−1) [m], the known in-plane displacement less the previous instant's.
 

@@ -198,7 +198,7 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
     res = disk_cg(A, b, q, Aq, rho, con, tol, max_iter, M, op.self_influence("11"),
                   scale=max(float(rho.sum()), 1e-300), exact=exact)
     Aq = res.Ax
-    if res.pending is not None and (exact or not res.converged):
+    if res.pending is not None and not res.converged:   # exact: none once converged
         Aq = Aq + A(res.pending)
     lam = multipliers(con, Aq + b, res.x, rho)
     return TangentialResult(q=res.x, domega=np.zeros(2), Aq=Aq, iterations=res.iterations,
