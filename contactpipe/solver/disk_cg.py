@@ -239,8 +239,9 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
 
     ``M`` None: TangCG's diagonal scaling, relative to a stick cell. Else the operator's
     ``tangential_preconditioner``, on the components along the turning cells' axes e_c
-    (:func:`slip_axes`): z_c = S_c M(S_c gt_c, d̄_c) [Pa], M ≈ (K_t + d̄_c I)⁻¹ the
-    (−Δ)^½ filter shifted by d̄_c = :data:`CURVATURE_SHIFT` x the turning cells' median
+    (:func:`slip_axes`): z_c = S_c M(S_c gt_c, d̄_c) [Pa], M ≈ (K_cc + d̄_c)⁻¹ the
+    inverse of the block's model symbol along e_c (anisotropic: K_cc is
+    1/(1 − ν_e) times stiffer for modes varying across e_c than along it) shifted by d̄_c = :data:`CURVATURE_SHIFT` x the turning cells' median
     circle curvature x the share of their tangents along e_c, S_c = √((a + d̄_c)/(a + d_i))
     each cell's own diagonal (d_i = 0 on free cells); z turned back to x1, x2 and cut back
     to the tangents on turning cells.
@@ -280,14 +281,14 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     if one.any():
         S = np.sqrt(np.where(act, 1.0 / (a_self + curv), 0.0))   # one field's root
         Sc = np.sqrt(a_self + shift[one])[:, None, None] * S
-        z[one] = M(Sc * g[one], shift[one])
+        z[one] = M(Sc * g[one], shift[one], axis=axes[one])
         z[one] *= Sc
     for c in np.flatnonzero(banded):
         d = shift[c]
         z[c] = 0.0
         for band, k in (("high", M.finest), ("low", LOW_BAND * d)):
             B = np.sqrt(np.where(turning, k / (k + curv), act))
-            z[c] += B * M(B * g[c], d, band=band)
+            z[c] += B * M(B * g[c], d, band=band, axis=axes[c])
     z = np.einsum("ci,c...->i...", axes, z)
     along = qhat[0] * z[0] + qhat[1] * z[1]
     return np.where(turning, z - along * qhat, z)

@@ -13,8 +13,9 @@ quadratic problem over the stacked tractions x = (p, q1),
 whose optimality conditions are the contact laws of both problems at once (closed gap
 under pressure; no slip increment in stick, a slip increment against the shear on the
 bound), with multipliers (ω3, Δω1). :func:`contactpipe.solver.cg.box_cg` solves it with
-the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and the (−Δ)^½ filter on
-each block as preconditioner: one operator application is two FFT pairs (two forward
+the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and each block filtered by
+the inverse of its own model symbol as preconditioner (K̂33 and the anisotropic K̂11:
+:meth:`~contactpipe.solver.operator.ContactOperator.joint_preconditioner`): one operator application is two FFT pairs (two forward
 transforms, four kernel products, two inverse), the preconditioner half of one (two
 fields filtered on the unpadded grid). The operator is applied in halves
 (:class:`~contactpipe.solver.blocks.BlockOperator`): a projection's correction, and where
@@ -143,7 +144,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
 
     apply = BlockOperator(conv, blocks)   # a zero block (a start's update): no transform
 
-    filter_ = op.normal_preconditioner()
+    filter_ = op.joint_preconditioner()
 
     def precondition(v):
         z = filter_(v, out=np.empty(shape))

@@ -20,6 +20,7 @@ import scipy.fft
 from .blocks import BlockOperator
 from .convolution import Convolver
 from .influence import body_kernel_parts, body_kernels, pair_kernels
+from .symbols import plane_model, radial_profile, root_laplacian
 
 __all__ = ["BodySpectra", "ContactOperator", "body_spectra", "body_spectra_parts",
            "convolver", "history_kernels", "history_displacement", "weighted_spectra"]
@@ -204,92 +205,147 @@ class ContactOperator:
         return self._derived[key]
 
     def _root_laplacian(self):
-        """The symbol of (−Δ)^½ on the n1 x n2 grid taken as periodic [1/m] (real-FFT
-        layout): sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the grid's angular
-        frequencies, the zero mode set to the smallest other value; cells of unknown sides
-        taken square (cached)."""
+        """The symbol of (−Δ)^½ on the n1 x n2 grid taken as periodic [1/m]
+        (:func:`~contactpipe.solver.symbols.root_laplacian`; cached)."""
         if "root_laplacian" not in self._derived:
-            conv = self.conv
-            d1, d2 = self.cell if self.cell is not None else (1.0, 1.0)
-            t1 = 2.0 * np.pi * np.fft.fftfreq(conv.n1)[:, None]
-            t2 = 2.0 * np.pi * np.fft.rfftfreq(conv.n2)[None, :]
-            sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2
-                            + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
-            sigma[0, 0] = sigma[sigma > 0].min()
-            self._derived["root_laplacian"] = sigma
+            self._derived["root_laplacian"] = root_laplacian(self.conv.n1, self.conv.n2,
+                                                             self.cell)
         return self._derived["root_laplacian"]
 
-    def normal_preconditioner(self):
-        """``M(v)``: v filtered by the symbol of (−Δ)^½, the discrete square root of the
-        negative Laplacian, on the n1 x n2 grid itself taken as periodic (a quarter of an
-        FFT pair per field, :meth:`Convolver.periodic_filter`): an approximation of the
-        normal operator's inverse (K33 behaves as 1/|ξ|) for preconditioned CG. ``v`` may
-        be one field or a stack of them.
+    def _corner(self, key):
+        """K̂_key σ at the grid's Nyquist corner [1/Pa]: the padded spectrum there times
+        σ_max (the self-influence times σ_max where that is not positive; cached)."""
+        name = ("corner", key)
+        if name not in self._derived:
+            conv = self.conv
+            value = float(np.real(self.k[key][conv.n1, conv.n2])) * conv.m1 * conv.m2
+            if not value > 0.0:
+                value = self.self_influence(key)
+            self._derived[name] = value * float(self._root_laplacian().max())
+        return self._derived[name]
 
-        The symbol is sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the grid's angular
-        frequencies, with the zero mode set to the smallest other value (M is then
-        symmetric positive definite; its scale does not matter to CG). Not the inverse of
+    def _radial(self):
+        """The model symbols' radial profile g(σ) [1]
+        (:func:`~contactpipe.solver.symbols.radial_profile`, from K33; cached)."""
+        if "radial" not in self._derived:
+            conv = self.conv
+            sampled = self.k["33"][::2, ::2] * (conv.m1 * conv.m2)
+            self._derived["radial"] = radial_profile(sampled, self._corner("33"),
+                                                     self._root_laplacian())
+        return self._derived["radial"]
+
+    def _plane(self):
+        """The in-plane model (:func:`~contactpipe.solver.symbols.plane_model`; cached)."""
+        if "plane" not in self._derived:
+            conv = self.conv
+            self._derived["plane"] = plane_model(self.k["11"], self._corner("11"), conv.n1,
+                                                 conv.n2, self.cell)
+        return self._derived["plane"]
+
+    def normal_preconditioner(self):
+        """``M(v)``: v filtered by σ/g(σ), the inverse of the normal block's model symbol
+        (:mod:`~contactpipe.solver.symbols`; its scale does not matter to CG), on the
+        n1 x n2 grid itself taken as periodic (a quarter of an FFT pair per field,
+        :meth:`Convolver.periodic_filter`): an approximation of the normal operator's
+        inverse (K33 behaves as 1/|ξ|) for preconditioned CG. ``v`` may be one field or
+        a stack of them.
+
+        σ is the discrete (−Δ)^½ (zero mode set to the smallest other value: M is then
+        symmetric positive definite) and g its radial correction, read from the grid's
+        own K33 spectrum (without it, 24 / 29 / 34 / 39 iterations of the bench's Hertz
+        solve at 64² / 128² / 256² / 512², with it 22 / 27 / 31 / 35). Not the inverse of
         the padded K33 circulant itself: with rectangular cells that circulant has
         negative modes, and even clipped to positive it made a worse preconditioner; and
         not on the padded grid, which cost four times the work for the same iterations
         (docs/design-choices.md). Cells of unknown sides are taken square.
         """
         if "precondition33" not in self._derived:     # the symbol, scaled by 1/(n1 n2)
-            sigma = self._root_laplacian()
+            sigma = self._root_laplacian() / self._radial()
             self._derived["precondition33"] = sigma / (sigma.max()
                                                        * self.conv.n1 * self.conv.n2)
         sigma = self._derived["precondition33"]
         return lambda v, out=None: self.conv.periodic_filter(sigma, v, out=out)
 
-    def tangential_preconditioner(self):
-        """``M(v, d)``: v [m] (two in-plane fields) filtered by the symbol
-        σ/(λ + d σ) [Pa/m], an approximation of (K_t + d I)⁻¹ on the n1 x n2 grid taken
-        as periodic (a quarter of an FFT pair per field, as
-        :meth:`normal_preconditioner`).
+    def joint_preconditioner(self):
+        """``M(v)``: (p, q1) stacked [m] filtered by the inverses of the model symbols of
+        K33 and K11 at their own scales [Pa/m], σ/(c33 g) and σ/(λ_F g (1 − ν_e ξ̂1²))
+        (:mod:`~contactpipe.solver.symbols`): the scalar joint solve's block-diagonal
+        preconditioner (half an FFT pair). The shear's filter is anisotropic: K11 is
+        1/(1 − ν_e) times stiffer for modes varying along x2 than along x1, which the
+        isotropic (−Δ)^½ filter shared with the pressure left to the iterations (steel on
+        aluminium fretting, 128²: 18.05 → 15.5 iterations a step, docs/design-choices.md).
+        The coupling blocks K13, K31 are left out (in the filter they cost iterations:
+        docs/design-choices.md)."""
+        symbol = self._shear_symbols()
+        return lambda v, out=None: self.conv.periodic_filter(symbol, v, out=out)
 
-        σ is the symbol of (−Δ)^½ [1/m]; the tangential block behaves as λ/σ, with λ [1/Pa]
-        matched to the block's finest mode (the padded K11 spectrum at the grid's
-        Nyquist corner, where K11 = K22 and K12 vanishes), and d [m/Pa] ≥ 0 is a uniform
-        shift of the diagonal: the curvature of the slip cells' circles in the vector CG
+    def shear_preconditioner(self):
+        """``M(v)``: q1 [m] filtered by the inverse of K11's model symbol (the shear block of
+        :meth:`joint_preconditioner`): the scalar tangential CG's preconditioner (a
+        quarter of an FFT pair)."""
+        symbol = self._shear_symbols()[1]
+        return lambda v, out=None: self.conv.periodic_filter(symbol, v, out=out)
+
+    def _shear_symbols(self):
+        """The symbols of :meth:`joint_preconditioner` (2, n1, n2//2 + 1) [Pa/m], scaled
+        for the inverse FFT (cached)."""
+        if "precondition_j" not in self._derived:
+            sigma = self._root_laplacian() / self._radial()
+            plane = self._plane()
+            scale = 1.0 / (self.conv.n1 * self.conv.n2)
+            self._derived["precondition_j"] = np.stack([
+                sigma * (scale / self._corner("33")),
+                sigma * (scale / plane.lam) / plane.along((1.0, 0.0))])
+        return self._derived["precondition_j"]
+
+    def tangential_preconditioner(self):
+        """``M(v, d, axis=e)``: v [m] (in-plane fields) filtered by the symbol
+        1/(K̂ + d) [Pa/m], an approximation of (K_ee + d)⁻¹ on the n1 x n2 grid taken as
+        periodic (a quarter of an FFT pair per field, as :meth:`normal_preconditioner`).
+
+        K̂ = λ_F (1 − ν_e (ξ̂·e)²)/σ is the model of the block along the unit in-plane
+        vector ``e`` (:mod:`~contactpipe.solver.symbols`; one per stacked field, (k, 2),
+        or one for all, (2,)); without ``axis`` K̂ = λ/σ, the isotropic model matched to
+        the block's finest mode (the padded K11 spectrum at the grid's Nyquist corner,
+        where K11 = K22 and K12 vanishes on square cells), as the pressure block of the
+        joint vector solve uses it. d [m/Pa] ≥ 0 is a uniform shift of the diagonal: the
+        curvature of the slip cells' circles in the vector CG
         (:func:`contactpipe.solver.disk_cg.direction`), which there outweighs the
         self-influence 2-10 times and makes the plain (−Δ)^½ filter useless. ``d`` is one
         number, or one per stacked field of ``v`` (the CG shifts the component along the
-        turning cells' tangents, not the one across them).
+        turning cells' tangents, not the one across them). The radial profile g of the
+        other filters is left out here: in the vector CG it measured no gain
+        (docs/design-choices.md).
 
         ``M(v, d, band="high")`` and ``M(v, d, band="low")`` split the unshifted filter
-        1/K̂ = σ/λ into two bands, K̂ = λ/σ the model and K̂_f = λ/σ_max its finest-mode
-        value (``M.finest`` [m/Pa]):
+        1/K̂ into two bands, K̂_f = λ/σ_max the finest-mode value (``M.finest`` [m/Pa]):
 
-            high: (K̂_f + d) / (K̂ (K̂ + d)),    low: (K̂ − K̂_f) / (K̂ (K̂ + d)),
+            high: (K̂_f + d) / (K̂ (K̂ + d)),    low: max(K̂ − K̂_f, 0) / (K̂ (K̂ + d)),
 
-        both ≥ 0 and summing to σ/λ; the high band is the shifted filter at the finest
-        mode and falls off where K̂ outgrows d. The vector CG scales each band by the
-        cells' own diagonal at its stiffness (:func:`contactpipe.solver.disk_cg.direction`),
-        so that a stick cell keeps the plain filter at every frequency while a turning
-        cell is shifted by its own curvature where the curvature counts.
+        both ≥ 0 and summing to 1/K̂ (where K̂ ≥ K̂_f); the high band is the shifted filter
+        at the finest mode and falls off where K̂ outgrows d. The vector CG scales each
+        band by the cells' own diagonal at its stiffness
+        (:func:`contactpipe.solver.disk_cg.direction`), so that a stick cell keeps the
+        plain filter at every frequency while a turning cell is shifted by its own
+        curvature where the curvature counts.
         """
-        if "precondition_t" not in self._derived:
-            conv = self.conv
-            sigma = self._root_laplacian()
-            corner = float(np.real(self.k["11"][conv.n1, conv.n2])) * conv.m1 * conv.m2
-            if not corner > 0.0:            # no finest-mode stiffness: the self-influence
-                corner = self.self_influence("11")
-            self._derived["precondition_t"] = (sigma, corner * float(sigma.max()))
-        sigma, lam = self._derived["precondition_t"]
+        sigma = self._root_laplacian()
+        lam, plane = self._corner("11"), self._plane()
         scale = 1.0 / (self.conv.n1 * self.conv.n2)
-
         finest = lam / float(sigma.max())
 
-        def apply(v, d=0.0, out=None, band=None):
+        def apply(v, d=0.0, out=None, band=None, axis=None):
             d = np.asarray(d, dtype=float)
             if d.ndim:                      # one shift per stacked field
                 d = d.reshape(d.shape + (1, 1))
-            if band is None:
-                symbol = sigma * (scale / (lam + d * sigma))
-            elif band == "high":            # (K̂_f + d) σ² / (λ (λ + d σ))
-                symbol = (finest + d) * sigma * sigma * (scale / (lam * (lam + d * sigma)))
-            elif band == "low":             # σ (λ − K̂_f σ) / (λ (λ + d σ))
-                symbol = sigma * (lam - finest * sigma) * (scale / (lam * (lam + d * sigma)))
+            L = lam if axis is None else plane.lam * plane.along(axis)
+            if band is None:                # σ / (L + d σ)
+                symbol = sigma * (scale / (L + d * sigma))
+            elif band == "high":            # (K̂_f + d) σ² / (L (L + d σ))
+                symbol = (finest + d) * sigma * sigma * (scale / (L * (L + d * sigma)))
+            elif band == "low":             # σ (L − K̂_f σ)⁺ / (L (L + d σ))
+                symbol = (sigma * np.maximum(L - finest * sigma, 0.0)
+                          * (scale / (L * (L + d * sigma))))
             else:
                 raise ValueError(f"band must be None, 'high' or 'low', not {band!r}")
             return self.conv.periodic_filter(symbol, v, out=out)

@@ -126,8 +126,9 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
         stick, and the preconditioned direction, which is not local, then carries the
         whole field off before the projection puts it back.
     precondition : bool
-        Preconditioned CG with the (−Δ)^½ filter of the normal solve
-        (:meth:`ContactOperator.normal_preconditioner`; K11, like K33, behaves as 1/|ξ|):
+        Preconditioned CG with the inverse of K11's model symbol
+        (:meth:`ContactOperator.shear_preconditioner`; K11, like K33, behaves as 1/|ξ|,
+        1/(1 − ν_e) times stiffer across x1 than along it):
         1.25 FFT pairs per iteration instead of one, in about half the iterations at 128²
         and fewer still on finer grids (docs/design-choices.md). False, or an operator
         without the filter: plain CG.
@@ -139,7 +140,7 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
     """
     scale = max(float(bound.sum()), 1e-300)
     con = Constraints.none(b1.shape) if T1 is None else None
-    make = getattr(op, "normal_preconditioner", None) if precondition else None
+    make = getattr(op, "shear_preconditioner", None) if precondition else None
     M = make() if make is not None else None
     target = con if con is not None else T1 / cell_area
 
