@@ -48,7 +48,7 @@ def test_model_matches_the_tangential_spectra(op):
     percentiles; 0.93-1.12, median 1.00, on square cells; the zero mode, where σ is set to
     its smallest other value, left out)."""
     conv = op.conv
-    sigma, lam = op._root_laplacian(), op._corner("11")
+    sigma, lam = op._root_laplacian(), op.corner("11")
     k = 0.5 * (np.real(op.k["11"]) + np.real(op.k["22"]))[::2, ::2] * conv.m1 * conv.m2
     ratio = (k * sigma / lam).ravel()[1:]
     lo, mid, hi = np.percentile(ratio, [10, 50, 90])
@@ -58,7 +58,7 @@ def test_model_matches_the_tangential_spectra(op):
 def test_large_shift_tends_to_the_diagonal(op):
     """M(v, d) → v/d as d grows: within 1e-5 of v/d for d = 1e6 λ/σ_min."""
     M = op.tangential_preconditioner()
-    sigma, lam = op._root_laplacian(), op._corner("11")
+    sigma, lam = op._root_laplacian(), op.corner("11")
     d = 1e6 * lam / float(sigma.min())
     v = np.random.default_rng(5).standard_normal((2, N1, N2))
     np.testing.assert_allclose(M(v, d) * d, v, rtol=0, atol=1e-5 * np.abs(v).max())

@@ -240,10 +240,11 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     ``M`` None: TangCG's diagonal scaling, relative to a stick cell. Else the operator's
     ``tangential_preconditioner``, on the components along the turning cells' axes e_c
     (:func:`slip_axes`): z_c = S_c M(S_c gt_c, d̄_c) [Pa], M ≈ (K_cc + d̄_c)⁻¹ the
-    inverse of the block's model symbol along e_c (anisotropic: K_cc is
-    1/(1 − ν_e) times stiffer for modes varying across e_c than along it) shifted by d̄_c = :data:`CURVATURE_SHIFT` x the turning cells' median
-    circle curvature x the share of their tangents along e_c, S_c = √((a + d̄_c)/(a + d_i))
-    each cell's own diagonal (d_i = 0 on free cells); z turned back to x1, x2 and cut back
+    inverse of the block's model symbol along e_c (anisotropic: K_cc is 1/(1 − ν_e)
+    times stiffer for modes varying across e_c than along it) shifted by
+    d̄_c = :data:`CURVATURE_SHIFT` x the turning cells' median circle curvature x the
+    share of their tangents along e_c, S_c = √((a + d̄_c)/(a + d_i)) each cell's own
+    diagonal (d_i = 0 on free cells); z turned back to x1, x2 and cut back
     to the tangents on turning cells.
 
     Where d̄_c > :data:`BAND_GATE` x a, the component is filtered in two bands instead

@@ -277,8 +277,7 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
                              [mu * k["13"], mu * mu * k["11"], mu * mu * k["12"]],
                              [mu * k["23"], mu * mu * k["21"], mu * mu * k["22"]]])
     M = op.tangential_preconditioner()
-    c11, c33 = (float(np.real(k[c][conv.n1, conv.n2])) for c in ("11", "33"))
-    pressure = PressureBlock(W / cell_area, c11 / c33 if c11 > 0.0 and c33 > 0.0 else 1.0)
+    pressure = PressureBlock(W / cell_area, op.corner("11") / op.corner("33"))
     con = force_rows(p0.shape, np.asarray(T, dtype=float) / mu, cell_area)
     a_self = op.self_influence("11")
     b = np.stack([b[0], mu * b[1], mu * b[2]])

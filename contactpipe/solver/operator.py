@@ -212,9 +212,10 @@ class ContactOperator:
                                                              self.cell)
         return self._derived["root_laplacian"]
 
-    def _corner(self, key):
+    def corner(self, key):
         """K̂_key σ at the grid's Nyquist corner [1/Pa]: the padded spectrum there times
-        σ_max (the self-influence times σ_max where that is not positive; cached)."""
+        σ_max (the self-influence times σ_max where that is not positive; cached). The
+        scale of the model symbols (:mod:`~contactpipe.solver.symbols`)."""
         name = ("corner", key)
         if name not in self._derived:
             conv = self.conv
@@ -230,7 +231,7 @@ class ContactOperator:
         if "radial" not in self._derived:
             conv = self.conv
             sampled = self.k["33"][::2, ::2] * (conv.m1 * conv.m2)
-            self._derived["radial"] = radial_profile(sampled, self._corner("33"),
+            self._derived["radial"] = radial_profile(sampled, self.corner("33"),
                                                      self._root_laplacian())
         return self._derived["radial"]
 
@@ -238,7 +239,7 @@ class ContactOperator:
         """The in-plane model (:func:`~contactpipe.solver.symbols.plane_model`; cached)."""
         if "plane" not in self._derived:
             conv = self.conv
-            self._derived["plane"] = plane_model(self.k["11"], self._corner("11"), conv.n1,
+            self._derived["plane"] = plane_model(self.k["11"], self.corner("11"), conv.n1,
                                                  conv.n2, self.cell)
         return self._derived["plane"]
 
@@ -273,20 +274,20 @@ class ContactOperator:
         preconditioner (half an FFT pair). The shear's filter is anisotropic: K11 is
         1/(1 − ν_e) times stiffer for modes varying along x2 than along x1, which the
         isotropic (−Δ)^½ filter shared with the pressure left to the iterations (steel on
-        aluminium fretting, 128²: 18.05 → 15.5 iterations a step, docs/design-choices.md).
+        aluminium fretting, 128²: 18.05 → 15.4 iterations a step, docs/design-choices.md).
         The coupling blocks K13, K31 are left out (in the filter they cost iterations:
         docs/design-choices.md)."""
-        symbol = self._shear_symbols()
+        symbol = self._joint_symbols()
         return lambda v, out=None: self.conv.periodic_filter(symbol, v, out=out)
 
     def shear_preconditioner(self):
         """``M(v)``: q1 [m] filtered by the inverse of K11's model symbol (the shear block of
         :meth:`joint_preconditioner`): the scalar tangential CG's preconditioner (a
         quarter of an FFT pair)."""
-        symbol = self._shear_symbols()[1]
+        symbol = self._joint_symbols()[1]
         return lambda v, out=None: self.conv.periodic_filter(symbol, v, out=out)
 
-    def _shear_symbols(self):
+    def _joint_symbols(self):
         """The symbols of :meth:`joint_preconditioner` (2, n1, n2//2 + 1) [Pa/m], scaled
         for the inverse FFT (cached)."""
         if "precondition_j" not in self._derived:
@@ -294,7 +295,7 @@ class ContactOperator:
             plane = self._plane()
             scale = 1.0 / (self.conv.n1 * self.conv.n2)
             self._derived["precondition_j"] = np.stack([
-                sigma * (scale / self._corner("33")),
+                sigma * (scale / self.corner("33")),
                 sigma * (scale / plane.lam) / plane.along((1.0, 0.0))])
         return self._derived["precondition_j"]
 
@@ -330,7 +331,7 @@ class ContactOperator:
         curvature where the curvature counts.
         """
         sigma = self._root_laplacian()
-        lam, plane = self._corner("11"), self._plane()
+        lam, plane = self.corner("11"), self._plane()
         scale = 1.0 / (self.conv.n1 * self.conv.n2)
         finest = lam / float(sigma.max())
 

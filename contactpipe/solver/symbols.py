@@ -91,7 +91,7 @@ class PlaneModel:
     ss: np.ndarray
     cs: np.ndarray
 
-    def along(self, axis=None):
+    def along(self, axis):
         """(1 − ν_e (ξ̂·e)²) for the unit in-plane vector(s) ``axis`` (2,) or (k, 2), the
         latter stacked (k, n1, n2//2 + 1)."""
         e = np.asarray(axis, dtype=float)
@@ -111,7 +111,7 @@ def plane_model(k11_padded, corner11, n1, n2, cell) -> PlaneModel:
     m1, m2 = 2 * n1, 2 * n2
     R = min(16, n1 // 4, n2 // 4)
     nu = 0.0
-    if R >= 2:
+    if R >= 2:      # one inverse transform, set-up work; not the operator's kept kernels
         k11 = scipy.fft.irfft2(k11_padded * (m1 * m2), s=(m1, m2))
         along, across = float(k11[R, 0]) * d1, float(k11[0, R]) * d2
         if along > 0.0 and across > 0.0:
