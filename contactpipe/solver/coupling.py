@@ -19,9 +19,10 @@ solved instead as one constrained problem over (p, q1) — the scalar form — o
 (:mod:`contactpipe.solver.joint`; from nothing in contact, a normal solve starts it), its
 shear put on the final pressure's bound by its last step and ended by
 :func:`contactpipe.solver.joint.finish` (:func:`~contactpipe.solver.joint.finish_vector`:
-Coulomb's law exact as after the passes above, without another solve): the same answer within the tolerance, in fewer FFT pairs
-(128²: paper fig. 3 with coupling, scalar form, 159 → 69 pairs per step; steel-on-aluminium
-fretting, vector form, 193 → 154).
+Coulomb's law exact as after the passes above, without another solve): the same answer
+within the tolerance, in fewer FFT pairs (128²: paper fig. 3 with coupling, scalar form,
+159 → 69 pairs per step when it was built, 30 now; steel-on-aluminium fretting, vector
+form, 193 → 154, 87 now: ``contactpipe bench fretting``, docs/design-choices.md).
 Where it does not converge, or in the vector form where no cell sticks any more, the
 block Gauss-Seidel passes take over. ``passes`` then counts the joint passes.
 

@@ -15,9 +15,9 @@ under pressure; no slip increment in stick, a slip increment against the shear o
 bound), with multipliers (ω3, Δω1). :func:`contactpipe.solver.cg.box_cg` solves it with
 the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and each block filtered by
 the inverse of its own model symbol as preconditioner (K̂33 and the anisotropic K̂11:
-:meth:`~contactpipe.solver.operator.ContactOperator.joint_preconditioner`): one operator application is two FFT pairs (two forward
-transforms, four kernel products, two inverse), the preconditioner half of one (two
-fields filtered on the unpadded grid). The operator is applied in halves
+:meth:`~contactpipe.solver.operator.ContactOperator.joint_preconditioner`): one operator
+application is two FFT pairs (two forward transforms, four kernel products, two inverse),
+the preconditioner half of one (two fields filtered on the unpadded grid). The operator is applied in halves
 (:class:`~contactpipe.solver.blocks.BlockOperator`): a projection's correction, and where
 a pass converges the next pass's start (its slip cells on their moved bound, box_cg's
 ``follow``), ride on the step's inverse transforms, at the cost of their forward

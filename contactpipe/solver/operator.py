@@ -235,6 +235,13 @@ class ContactOperator:
                                                      self._root_laplacian())
         return self._derived["radial"]
 
+    def _inverse_model(self):
+        """σ/g(σ) [1/m]: the inverse model symbols' common shape, before their scales
+        (cached)."""
+        if "inverse_model" not in self._derived:
+            self._derived["inverse_model"] = self._root_laplacian() / self._radial()
+        return self._derived["inverse_model"]
+
     def _plane(self):
         """The in-plane model (:func:`~contactpipe.solver.symbols.plane_model`; cached)."""
         if "plane" not in self._derived:
@@ -261,7 +268,7 @@ class ContactOperator:
         (docs/design-choices.md). Cells of unknown sides are taken square.
         """
         if "precondition33" not in self._derived:     # the symbol, scaled by 1/(n1 n2)
-            sigma = self._root_laplacian() / self._radial()
+            sigma = self._inverse_model()
             self._derived["precondition33"] = sigma / (sigma.max()
                                                        * self.conv.n1 * self.conv.n2)
         sigma = self._derived["precondition33"]
@@ -291,7 +298,7 @@ class ContactOperator:
         """The symbols of :meth:`joint_preconditioner` (2, n1, n2//2 + 1) [Pa/m], scaled
         for the inverse FFT (cached)."""
         if "precondition_j" not in self._derived:
-            sigma = self._root_laplacian() / self._radial()
+            sigma = self._inverse_model()
             plane = self._plane()
             scale = 1.0 / (self.conv.n1 * self.conv.n2)
             self._derived["precondition_j"] = np.stack([
