@@ -344,10 +344,10 @@ def test_joint_solve_ends_with_an_exact_product(monkeypatch):
     """The bookkeeping of deferred products, pushed to its extreme: every projection's
     product deferred (DEFER = 1e300; steel on aluminium, 32², the Spence shear of W alone
     at tolerance 1e-6, where the last pass too ends with some left out, folded into its
-    last step). The result's A x is still the product of its own (p, q1) to 1e-13, as with DEFER = 0, and ω3 is the
-    mean of the exact gap over the contact cells (its multiplier) to 1e-12. (The answer
-    itself is compared at the default DEFER, above: a search that never sees its
-    projections is not the solver's.)"""
+    last step). The result's A x is still the product of its own (p, q1) to 1e-13, as
+    with DEFER = 0, and ω3 is the mean of the exact gap over the contact cells (its
+    multiplier) to 1e-12. (The answer itself is compared at the default DEFER, above: a
+    search that never sees its projections is not the solver's.)"""
     from contactpipe.solver.normal import solve_normal
     from test_coupling import ALUMINIUM as AL, STEEL, W, instant
     op, gap, U, cell, _, _ = instant(STEEL, AL)

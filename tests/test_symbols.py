@@ -2,9 +2,10 @@
 kernel spectra and the closed forms they come from.
 
 K̂33 ≈ c33 g(σ)/σ and K̂_ab ≈ λ_F g(σ)(δ_ab − ν_e ξ̂_a ξ̂_b)/σ: ν_e is the pair's
-effective Poisson ratio, Σ(ν/G) / Σ(1/G) over the two bodies (the in-plane compliance of
-each half-space is (1 − ν ξ̂1²)/(G|ξ|), Johnson 1985 §3.2–3.5); the model is checked on the
-padded spectra sampled at the unpadded grid's frequencies, square and rectangular cells.
+effective Poisson ratio, Σ(ν/G) / Σ(1/G) over the two bodies (the in-plane compliance
+of each half-space is (1 − ν ξ̂1²)/(G|ξ|), Johnson 1985 §3.2–3.5); the model is checked
+on the padded spectra sampled at the unpadded grid's frequencies, square and rectangular
+cells.
 The filters must be symmetric positive definite for preconditioned CG.
 """
 import numpy as np

@@ -17,11 +17,11 @@ the two force rows as :class:`~contactpipe.solver.cg.BlockSums` and each block f
 the inverse of its own model symbol as preconditioner (K̂33 and the anisotropic K̂11:
 :meth:`~contactpipe.solver.operator.ContactOperator.joint_preconditioner`): one operator
 application is two FFT pairs (two forward transforms, four kernel products, two inverse),
-the preconditioner half of one (two fields filtered on the unpadded grid). The operator is applied in halves
-(:class:`~contactpipe.solver.blocks.BlockOperator`): a projection's correction, and where
-a pass converges the next pass's start (its slip cells on their moved bound, box_cg's
-``follow``), ride on the step's inverse transforms, at the cost of their forward
-transforms.
+the preconditioner half of one (two fields filtered on the unpadded grid). The operator
+is applied in halves (:class:`~contactpipe.solver.blocks.BlockOperator`): a projection's
+correction, and where a pass converges the next pass's start (its slip cells on their
+moved bound, box_cg's ``follow``), ride on the step's inverse transforms, at the cost of
+their forward transforms.
 
 Only the bound g = μp is then lagged. A pass moves the slip cells' shear by μ δp and the
 pressure answers through K31 only, so a pass cuts the pressure change by about μβ

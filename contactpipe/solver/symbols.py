@@ -36,14 +36,20 @@ __all__ = ["PlaneModel", "plane_model", "radial_profile", "root_laplacian"]
 RINGS = 24
 
 
+def _angles(n1, n2):
+    """The grid's angular frequencies θ1 (n1, 1) and θ2 (1, n2//2 + 1) [rad], real-FFT
+    layout."""
+    return (2.0 * np.pi * np.fft.fftfreq(n1)[:, None],
+            2.0 * np.pi * np.fft.rfftfreq(n2)[None, :])
+
+
 def root_laplacian(n1, n2, cell):
     """The symbol σ [1/m] of (−Δ)^½ on the n1 x n2 grid taken as periodic (real-FFT
     layout): sqrt((2 − 2 cos θ1)/Δ1² + (2 − 2 cos θ2)/Δ2²), θ the grid's angular
     frequencies, the zero mode set to the smallest other value; cells of unknown sides
     (``cell`` None) taken square of side 1."""
     d1, d2 = cell if cell is not None else (1.0, 1.0)
-    t1 = 2.0 * np.pi * np.fft.fftfreq(n1)[:, None]
-    t2 = 2.0 * np.pi * np.fft.rfftfreq(n2)[None, :]
+    t1, t2 = _angles(n1, n2)
     sigma = np.sqrt((2.0 - 2.0 * np.cos(t1)) / d1 ** 2 + (2.0 - 2.0 * np.cos(t2)) / d2 ** 2)
     sigma[0, 0] = sigma[sigma > 0].min() if sigma.size > 1 else 1.0
     return sigma
@@ -116,8 +122,7 @@ def plane_model(k11_padded, corner11, n1, n2, cell) -> PlaneModel:
         along, across = float(k11[R, 0]) * d1, float(k11[0, R]) * d2
         if along > 0.0 and across > 0.0:
             nu = float(np.clip(1.0 - across / along, 0.0, 0.5))
-    t1 = 2.0 * np.pi * np.fft.fftfreq(n1)[:, None]
-    t2 = 2.0 * np.pi * np.fft.rfftfreq(n2)[None, :]
+    t1, t2 = _angles(n1, n2)
     x1 = np.broadcast_to(2.0 * np.sin(t1 / 2.0) / d1, (n1, t2.size))
     x2 = np.broadcast_to(2.0 * np.sin(t2 / 2.0) / d2, (n1, t2.size))
     norm2 = x1 * x1 + x2 * x2
