@@ -25,7 +25,7 @@ the jump of the load: H(t0) = φ0 σ_0.
     φ and Δt (:func:`is_monotone`; there it is the more accurate of the two), "bdf2"
     elsewhere: Kelvin–Voigt, stiff Zener/Prony terms, a dashpot with Δt ≳ 2t′, and a
     tabulated φ (:func:`resolve_rule`).
-``"bdf2"`` (second order, L-stable, sign-preserving for every φ and Δt)
+``"bdf2"`` (second order, L-stable, no negative amplification factor for any φ and Δt)
     exponentially fitted BDF2 on each ζ_i (exact when σ is linear over the last two
     steps, and BDF2 itself as Δt/τ_i → 0) and BDF2 on I. It uses the past of I and ζ_i
     only, never past tractions, so an error in σ — the concentrated load of a body without
