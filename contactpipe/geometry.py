@@ -3,7 +3,7 @@
 Pure functions of the 1-D cell-centre coordinates ``x1`` (N1,) and ``x2`` (N2,) [m],
 returning the gap on the grid as an array of shape (N1, N2) [m], ``gap[i, j]`` at
 ``(x1[i], x2[j])``. The analytical shapes have their first contact point at the origin,
-where the gap is zero (CONTRACT §2); the gap is >= 0 everywhere.
+where the gap is zero (docs/scene-file.md, [geometry]); the gap is >= 0 everywhere.
 
 - :func:`sphere_gap`: the Hertz paraboloid r^2 / (2 R).
 - :func:`ellipsoid_gap`: x1^2 / (2 R1) + x2^2 / (2 R2).

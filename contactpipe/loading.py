@@ -1,4 +1,4 @@
-"""The load program of the six rigid-body freedoms (paper eqs. 1-4; CONTRACT §2b).
+"""The load program of the six rigid-body freedoms (paper eqs. 1-4; docs/conventions.md).
 
 Each freedom of body 1 relative to body 2 is force-controlled or displacement-controlled,
 as a piecewise-linear program through the knots of ``load.time``. One table

@@ -1,6 +1,6 @@
 """One table: every archive variable -> dims, units, long_name, storage type.
 
-The names follow the paper's notation and CONTRACT §3. Everything that labels a result
+The names follow the paper's notation (docs/archive.md lists them). Everything that labels a result
 (:mod:`contactpipe.archive`, :mod:`contactpipe.results`, sweeps) reads this table; nothing
 else spells a unit or a long name.
 
@@ -117,7 +117,7 @@ COORDINATES: dict[str, dict] = {
     "t_norm": {"units": "1", "long_name": "dimensionless time (t - t0)/window"},
 }
 
-# Global attributes of every archive (CONTRACT §3) and their meaning.
+# Global attributes of every archive (docs/archive.md) and their meaning.
 GLOBAL_ATTRS: dict[str, str] = {
     "Conventions": "CF version followed: " + CONVENTIONS,
     "contactpipe_version": "version of contactpipe that wrote the archive",

@@ -748,7 +748,7 @@ class Grid(Part):
     def coordinates(self):
         """Cell centres (x1 (N1,), x2 (N2,)) [m]: x = -L/2 + (i + 1/2) L/N, ascending.
 
-        The one implementation of the grid's coordinates (CONTRACT §2)."""
+        The one implementation of the grid's coordinates (docs/conventions.md, Grid)."""
         return tuple(-L / 2 + (np.arange(N) + 0.5) * (L / N)
                      for N, L in zip(self.points, self._size()))
 

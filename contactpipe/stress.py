@@ -3,7 +3,7 @@
     >>> st = cp.subsurface_stress(ds, x3=[0.0, 1e-4, 2e-4], body="halfspace")
     >>> st.von_mises.max()
 
-Reads any archive (CONTRACT §3): its tractions ``p``, ``q1``, ``q2`` and its ``scene``
+Reads any archive (docs/archive.md): its tractions ``p``, ``q1``, ``q2`` and its ``scene``
 attribute for the Poisson ratio of the chosen body. Returns a Dataset over
 (``time``, ``x3``, ``x1``, ``x2``) with ``s11 s22 s33 s12 s13 s23`` and ``von_mises`` [Pa],
 tension > 0, in the frame x1, x2, x3 with x3 pointing **into the chosen body** (x3 >= 0 is
@@ -190,7 +190,7 @@ def check_request(ds, x3, body="halfspace", time=None, poisson=None):
                            f"{type(ds).__name__}")
     if "p" not in ds.data_vars:
         raise ArchiveError("the archive has no contact pressure 'p': not a contactpipe "
-                           "archive (CONTRACT §3)")
+                           "archive")
     for name in ("p", "q1", "q2"):
         if name in ds.data_vars and tuple(ds[name].dims) != ("time", "x1", "x2"):
             raise ArchiveError(f"'{name}' has dims {ds[name].dims}, expected "
@@ -300,7 +300,7 @@ def subsurface_stress(ds, x3, body: str = "halfspace", time=None, *, chunks=None
     Parameters
     ----------
     ds : xarray.Dataset or path
-        An archive (CONTRACT §3), in memory or a file (then opened lazily).
+        An archive (docs/archive.md), in memory or a file (then opened lazily).
     x3 : float or sequence of float
         Depths into the chosen body [m], >= 0; sorted, duplicates dropped. At x3 = 0 the
         stress is that at cell centres (it jumps at cell edges).

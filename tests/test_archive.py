@@ -1,4 +1,4 @@
-"""Archives: round trips, precision and compression, atomic writes, refusals (CONTRACT §3)."""
+"""Archives: round trips, precision and compression, atomic writes, refusals."""
 import os
 import pathlib
 import shutil

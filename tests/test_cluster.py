@@ -5,7 +5,7 @@ LocalCluster): the worker has its own working directory, its own ``--local-direc
 and its own ``TMPDIR``, and an audit hook (a ``--preload`` module) that records every
 file the worker opens, renames, creates or removes under the sweep's output folder or
 its own TMPDIR. The worker is never told the output folder: it simulates into its TMPDIR
-and sends each archive back; the client checks it and writes it (CONTRACT §1, §3b).
+and sends each archive back; the client checks it and writes it.
 """
 import json
 import os

@@ -1,5 +1,10 @@
-"""The documentation says what the code does.
+"""The documentation stands on its own and says what the code does.
 
+* No file of the package, the docs, the README, the tests, the studies, the benchmarks or
+  the examples cites a section of a document that is not in the repository (the project's
+  contract and design notes): they say it in their own words.
+* ``contactpipe sweep --help`` and ``contactpipe compare --help`` are short (the module
+  docstrings are developer documentation) and show examples.
 * docs/time-integration.md, section 3: on a fixed grid a sphere's pressure field converges
   at second order where the contact grows slowly (Maxwell), and not at all in the maximum
   norm at its front where it grows fast (Kelvin-Voigt), while the interior converges.
@@ -7,6 +12,8 @@
   varies in time (bulk = "elastic").
 """
 import math
+import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -14,6 +21,45 @@ import pytest
 import contactpipe as cp
 from contactpipe.pipeline import cli
 from contactpipe.testing import creep_laws
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+SCANNED = ["contactpipe", "docs", "tests", "studies", "benchmarks", "examples", "README.md"]
+SUFFIXES = {".py", ".md", ".toml", ".txt", ".rst", ".cfg"}
+# Spelled in pieces so that this file does not match itself.
+CITATION = re.compile("CONTR" + r"ACT\b|" + "DES" + r"IGN *§|the " + "contr" + "act's")
+
+
+def _scanned_files():
+    for name in SCANNED:
+        path = ROOT / name
+        if path.is_file():
+            yield path
+        elif path.is_dir():
+            yield from (p for p in sorted(path.rglob("*"))
+                        if p.is_file() and p.suffix in SUFFIXES and "__pycache__" not in p.parts)
+
+
+def test_no_citation_of_documents_outside_the_repository():
+    hits = [f"{p.relative_to(ROOT)}:{i}: {line.strip()}"
+            for p in _scanned_files()
+            for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+            if CITATION.search(line)]
+    assert not hits, ("these lines cite the contract or the design notes, which are not in "
+                      "the repository; say it in the docs' own words:\n" + "\n".join(hits))
+
+
+@pytest.mark.parametrize("command", ["sweep", "compare"])
+def test_stage_help_is_short_with_examples(command, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main([command, "--help"])
+    assert exit_info.value.code == 0
+    text = capsys.readouterr().out
+    lines = text.splitlines()
+    assert len(lines) < 40, f"`contactpipe {command} --help` has {len(lines)} lines (< 40)"
+    assert "Example" in text
+    examples = [ln for ln in lines if ln.strip().startswith(f"contactpipe {command} ")]
+    assert len(examples) >= 2, f"`contactpipe {command} --help` shows {len(examples)} examples"
+    assert ":func:" not in text and "``" not in text    # not the developer docstring
 
 
 # --------------------------------------------------------------------------- the front

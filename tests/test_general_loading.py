@@ -1,4 +1,4 @@
-"""General loading (paper eqs. 1-4, CONTRACT §2b): moments and rotations, approach
+"""General loading (paper eqs. 1-4): moments and rotations, approach
 control down to separation, combined loading through the contact-law checker, and the
 one-line errors of bad input.
 

@@ -1,4 +1,4 @@
-"""simulate(): the Dataset of CONTRACT §3, streaming archives, options, errors, CLI run."""
+"""simulate(): the archive's Dataset (docs/archive.md), streaming archives, options, errors, CLI run."""
 import subprocess
 import sys
 

@@ -1,5 +1,5 @@
 """Sweeps: dask execution, t_norm alignment, resume after a kill, corrupt members, failures,
-zip mode, derived parameters, validation, locking, sweep files (CONTRACT §1, §3, §3b, §4)."""
+zip mode, derived parameters, validation, locking, sweep files."""
 import fcntl
 import importlib
 import json
@@ -23,7 +23,7 @@ from contactpipe.pipeline.sweep import (SweepLockedError, open_sweep,
                                register_parameter, sweep, with_window)
 from contactpipe.testing import TINY_SCENES
 
-# the module (``contactpipe.pipeline.sweep`` the attribute is the function, CONTRACT §1)
+# the module (``contactpipe.pipeline.sweep`` the attribute is the function)
 sweep_mod = importlib.import_module("contactpipe.pipeline.sweep")
 parameters_mod = importlib.import_module("contactpipe.pipeline.parameters")
 
@@ -404,7 +404,7 @@ def test_sweep_file_relative_base_and_dotted_axes(tmp_path, creep):
 
 
 def test_public_names_resolve():
-    """``cp.sweep`` and ``cp.open_sweep`` (CONTRACT §1) in a fresh interpreter."""
+    """``cp.sweep`` and ``cp.open_sweep`` (the public API) in a fresh interpreter."""
     code = ("import contactpipe as cp; assert callable(cp.sweep), cp.sweep; "
             "assert callable(cp.open_sweep); assert cp.sweep.__name__ == 'sweep'; "
             "assert cp.open_sweep.__name__ == 'open_sweep'")

@@ -1,6 +1,6 @@
 """A sweep folder edited, swapped or damaged by hand: the manifest is validated on read
 (one ArchiveError naming the key), each member archive is checked against its digest,
-and a resumed sweep deletes nothing it cannot prove broken (CONTRACT §3b)."""
+and a resumed sweep deletes nothing it cannot prove broken."""
 import importlib
 import json
 import os

@@ -5,7 +5,7 @@
 how many instants break a rule and the first of them:
 
 * a float that is NaN or inf;
-* a negative pressure ``p`` or gap ``h`` (the contract: p >= 0, h >= 0);
+* a negative pressure ``p`` or gap ``h`` (p >= 0 and h >= 0 by the contact laws);
 * a ``status`` outside its ``flag_values``;
 * Coulomb's law broken: |q| - mu p > :data:`COULOMB_RTOL` x max(mu p) of that instant
   (mu from the ``scene`` attribute's ``friction.mu``, or the archive's map ``mu``);

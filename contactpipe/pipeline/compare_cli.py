@@ -20,8 +20,24 @@ from .plot import plot_profiles, save_figure
 __all__ = ["add_arguments", "main"]
 
 
+DESCRIPTION = """\
+Check an archive against the closed form its scene admits (Hertz, Mindlin-Deresiewicz,
+Lee-Radok, the general loading's), or against a reference archive; print the largest of
+each error and when it occurs, and write the error table and a profiles figure when asked.
+Errors are dimensionless (tractions over the closed form's p0, the shear over mu p0, radii
+over the closed-form radius, the stick radius in cells). The error variables: the
+docstring of contactpipe.pipeline.compare, and docs/fretting.md for the general loading."""
+
+EPILOG = """\
+Examples:
+  contactpipe compare runs/fig2.nc
+  contactpipe compare runs/fig2.nc -o runs/fig2-errors.csv --figure runs/fig2-errors.png
+  contactpipe compare runs/fine.nc runs/coarse.nc -o runs/fine-vs-coarse.nc"""
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.description = f"{parser.description}\n\n{compare_stage.__doc__.strip()}"
+    parser.description = DESCRIPTION      # short help; the module docstrings are for developers
+    parser.epilog = EPILOG
     parser.add_argument("archive", type=pathlib.Path, help="archive to check (netCDF)")
     parser.add_argument("reference", type=pathlib.Path, nargs="?", default=None,
                         help="reference archive (default: the scene's closed form)")

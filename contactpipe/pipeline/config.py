@@ -7,7 +7,7 @@ file is reported at once in one :class:`~contactpipe.SceneError`, each naming th
 the dotted field, the value given and what is allowed. The formats are documented in
 ``docs/scene-file.md``.
 
-Sweep file (CONTRACT §3b, with the ``[dask]`` extension)::
+Sweep file (docs/scene-file.md, with the ``[dask]`` table)::
 
     base = "scene.toml"        # relative to this file; or an inline [scene] table
     mode = "product"           # product | zip
@@ -394,7 +394,7 @@ def read_sweep_table(d: Mapping, path: str, base_dir: pathlib.Path, problems: li
 
 
 def read_sweep_file(path) -> SweepFile:
-    """Read and validate a sweep file (CONTRACT §3b, with the ``[dask]`` extension).
+    """Read and validate a sweep file (docs/scene-file.md, with the ``[dask]`` table).
 
     Raises
     ------
@@ -414,7 +414,7 @@ def read_sweep_file(path) -> SweepFile:
 
 
 def load_sweep_file(path):
-    """(base Scene, axes, mode) of a sweep file (CONTRACT §3b); see :func:`read_sweep_file`."""
+    """(base Scene, axes, mode) of a sweep file (docs/scene-file.md); see :func:`read_sweep_file`."""
     sf = read_sweep_file(path)
     return sf.base, sf.axes, sf.mode
 

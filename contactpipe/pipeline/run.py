@@ -13,7 +13,7 @@ Pipeline file::
     name = "paper-fig3"
     out = "runs/paper-fig3"        # member archives and products (relative to this file)
     [sweep]
-    file = "sweep.toml"            # a sweep file (CONTRACT §3b), relative to this file;
+    file = "sweep.toml"            # a sweep file (docs/scene-file.md), relative to this file;
                                    # or inline: base = "scene.toml" (or [sweep.scene]),
                                    # mode = "product", [sweep.axes]
     [compare]                      # optional

@@ -5,7 +5,7 @@
 
 Reads the archive's tractions (p, q1, q2) and its scene (for the body's Poisson ratio) and
 writes a netCDF file over (time, x3, x1, x2) with s11 s22 s33 s12 s13 s23 and von_mises
-[Pa], tension > 0, x3 the depth into the chosen body (CONTRACT §5). Default instant: the
+[Pa], tension > 0, x3 the depth into the chosen body (docs/stress.md). Default instant: the
 last; ``--time all`` every instant. The archive is read lazily and the stress is streamed
 to the file block by block (instants x depths), so archives larger than memory work.
 The file is written atomically (nothing is left on failure).

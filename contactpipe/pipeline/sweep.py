@@ -95,8 +95,8 @@ sends, so connecting to a scheduler runs whatever code it hands back, in this pr
 never point a sweep (argument, ``--scheduler`` or a sweep file's ``[dask] scheduler``)
 at a scheduler you do not control.
 
-Sweep file (CONTRACT §3b)
--------------------------
+Sweep file (docs/scene-file.md)
+-------------------------------
 ::
 
     base = "scene.toml"        # relative to this file; or an inline [scene] table
@@ -401,9 +401,25 @@ def _paths(*objs) -> list:
 
 # ------------------------------------------------------------------- command line
 
+DESCRIPTION = """\
+Run every member of a sweep file (a base scene and the axes it varies) as a dask task and
+write one archive per member, with manifest.json, into DIR. Resumable: run it again and
+the members already done are kept. Exit status 0 when every member is done, 1 when one
+failed (they are listed), 2 for a bad sweep file or output folder. The sweep file's keys
+are in docs/scene-file.md; cp.open_sweep(DIR) reads the folder as one Dataset."""
+
+EPILOG = """\
+Examples:
+  contactpipe sweep examples/sweep.toml -o runs/sweep
+  contactpipe sweep examples/sweep.toml -o runs/sweep --workers 2 --no-progress
+  contactpipe sweep sweep.toml -o runs/sweep --scheduler tcp://10.0.0.5:8786"""
+
+
 def add_arguments(parser) -> None:
+    parser.description = DESCRIPTION      # short help; the module docstring is for developers
+    parser.epilog = EPILOG
     parser.add_argument("sweep_file", type=pathlib.Path, metavar="SWEEP.toml",
-                        help="sweep file (CONTRACT §3b)")
+                        help="sweep file (keys: docs/scene-file.md)")
     # str, not pathlib.Path: Path("") is "." and an empty -o must be refused, not the cwd
     parser.add_argument("-o", "--out-dir", required=True, metavar="DIR",
                         help="folder of the member archives and manifest.json")
