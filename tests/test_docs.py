@@ -136,3 +136,55 @@ def test_stress_stage_refuses_a_varying_poisson_ratio(tmp_path, capsys):
             cp.subsurface_stress(ds, [1e-4])
         st = cp.subsurface_stress(ds, [1e-4], poisson=0.45)
         assert st.attrs["poisson"] == 0.45
+
+
+# --------------------------------------------------------------------------- README figures
+def _readme_figures():
+    import importlib.util
+    path = ROOT / "benchmarks" / "readme_figures.py"
+    spec = importlib.util.spec_from_file_location("readme_figures", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _readme_block(module):
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert text.count(module.BEGIN) == 1 and text.count(module.END) == 1
+    return text.split(module.BEGIN)[1].split(module.END)[0].strip()
+
+
+def test_readme_speed_table_comes_from_the_results_file():
+    """The README's speed table is the rendering of benchmarks/results/readme.csv, or, in
+    a tree where that file was not written yet, says so (it never shows other figures)."""
+    rf = _readme_figures()
+    block = _readme_block(rf)
+    if rf.RESULTS.exists():
+        assert block == rf.render(*rf.read_csv(rf.RESULTS)), (
+            "README speed table differs from benchmarks/results/readme.csv: run "
+            "python benchmarks/readme_figures.py --render benchmarks/results/readme.csv")
+    else:
+        assert "|" not in block and "--update-readme" in block, block
+
+
+def test_readme_figures_quick_run(tmp_path, capsys):
+    """The script runs every case on 16² and writes a file it can render: every quantity
+    finite, every pair count a positive whole number, every case and form present."""
+    rf = _readme_figures()
+    out = tmp_path / "readme.csv"
+    assert rf.main(["--quick", "--out", str(out)]) == 0
+    header, rows = rf.read_csv(out)
+    assert any("--quick" in line for line in header)
+    values = {(r["case"], r["form"], r["quantity"]): float(r["value"]) for r in rows}
+    assert all(math.isfinite(v) for v in values.values())
+    pairs = [v for (_, _, q), v in values.items() if q.endswith("fft_pairs")]
+    assert pairs and all(v == int(v) and v >= 0 for v in pairs)
+    assert values[("fretting", "scalar", "preload_estimate_fft_pairs")] > 0   # steel/Al row
+    assert {(c, f) for c, f, _ in values} >= {
+        ("normal", "normal"), ("fretting", "scalar"), ("fretting", "vector"),
+        ("paper-fig3", "scalar"), ("paper-fig3", "vector"), ("fig3-study", "tau=1t'"),
+        ("fig3-study", "tau=2t'"), ("memory", "normal")}
+    table = rf.render(header, rows)
+    assert table.count("\n| ") == 12 and "fig3_maxwell.py" in table     # header + 11 rows
+    with pytest.raises(SystemExit):                   # a quick run never touches the README
+        rf.main(["--quick", "--update-readme", "--out", str(out)])

@@ -16,6 +16,10 @@ memory      per-step time at steps 10 and 1000 of a 64² creep run (Maxwell, Pro
 paper-fig3  rigid sphere on a Maxwell half-space (ν = 0.3, coupling on), 128², 200 steps, end to end
             (``--vector`` adds the vector tangential form)
 long-run    256², 2000 steps streamed to disk: peak resident memory
+
+Each case also returns its figures as records (one dict per row: the case, the grid, the
+form and the measured quantities), which ``benchmarks/readme_figures.py`` writes to the
+file the README's speed figures are quoted from.
 """
 from __future__ import annotations
 
@@ -61,6 +65,7 @@ def _floor_ms(n, backend, threads):
 
 
 def bench_normal(grids, backend, threads):
+    rows = []
     print("normal contact: Hertz, steel on steel, W = 1 kN, R = 18 mm, grid over 4a, tol 1e-10")
     print(f"{'grid':>9} {'iter':>5} {'pairs':>6} {'pairs/it':>8} {'wall ms':>8} "
           f"{'floor ms':>9} {'pairs*floor':>11} {'plan s':>7}")
@@ -79,9 +84,13 @@ def bench_normal(grids, backend, threads):
         it, pairs = int(ds.iterations[0]), int(ds.fft_pairs[0])
         print(f"{n:>4}x{n:<4} {it:>5} {pairs:>6} {pairs / it:>8.2f} {wall:>8.1f} {floor:>9.3f} "
               f"{pairs * floor:>11.1f} {plan:>7.2f}")
+        rows.append(dict(case="normal", pair="steel/steel", form="normal", grid=n,
+                         iterations=it, fft_pairs=pairs, wall_ms=wall, floor_ms=floor))
+    return rows
 
 
 def bench_fretting(grids, backend, threads, steps=40):
+    rows = []
     print(f"fretting loop T: 0 -> .9μW -> -.9μW -> .9μW, μ = 0.1, {steps} steps, grid over 3a, "
           "tol 1e-9; per step after the first (warm-started)")
     print(f"{'pair':>16} {'form':>7} {'grid':>9} {'iter/step':>9} {'pairs/step':>10} "
@@ -110,28 +119,40 @@ def bench_fretting(grids, backend, threads, steps=40):
                 print(f"{label:>16} {form:>7} {n:>4}x{n:<4} {it:>9.1f} {pairs:>10.1f} "
                       f"{passes:>6.1f} {first:>6} {pre:>7} {wall / (steps + 1) * 1e3:>8.1f} "
                       f"{floor:>9.3f}")
+                rows.append(dict(case="fretting", pair=label, form=form, grid=n, steps=steps,
+                                 iterations_per_step=it, fft_pairs_per_step=pairs,
+                                 passes_per_step=passes, first_instant_fft_pairs=first,
+                                 preload_estimate_fft_pairs=pre,
+                                 ms_per_step=wall / (steps + 1) * 1e3, floor_ms=floor))
+    return rows
 
 
-def bench_memory(backend, threads):
-    print("memory: per-step cost of the viscoelastic history (64², rigid sphere, W stepped, "
+def bench_memory(backend, threads, n=64, steps=1000):
+    rows = []
+    print(f"memory: per-step cost of the viscoelastic history ({n}², rigid sphere, W stepped, "
           "window 2 s); the recursion keeps it flat")
-    print(f"{'creep':>8} {'ms/step (steps 0-10)':>21} {'ms/step (steps 990-1000)':>25}")
+    print(f"{'creep':>8} {'ms/step (steps 0-10)':>21} "
+          f"{f'ms/step (steps {steps - 10}-{steps})':>25}")
     for creep in ({"creep": "maxwell", "relaxation_time": 1.0},
                   {"creep": "prony", "terms": [[0.5, 0.1], [1.0, 1.0]], "relaxation_time": 2.0}):
         sc = _scene(indenter={"material": "rigid"},
                     halfspace={"material": "viscoelastic", "young": 105e9, "poisson": 0.5,
                                **creep},
                     load={"time": [0.0, 2.0], "normal_force": W},
-                    grid={"points": [64, 64], "size": "auto"}, time={"steps": 1000},
+                    grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
                     solver={"fft": backend, "threads": threads})
         stamps = []
         simulate(sc, on_step=lambda k, t, rec: stamps.append(time.perf_counter()))
         d = np.diff(stamps) * 1e3
         times = (d[1:11].mean(), d[-10:].mean())
         print(f"{creep['creep']:>8} {times[0]:>21.2f} {times[1]:>25.2f}")
+        rows.append(dict(case="memory", pair=creep["creep"], form="normal", grid=n,
+                         steps=steps, ms_per_step_first=times[0], ms_per_step_last=times[1]))
+    return rows
 
 
 def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
+    rows = []
     Ts = 0.9 * MU * W
     print(f"paper figure 3: rigid sphere on Maxwell (glassy E = 105 GPa, ν = 0.3: the steel "
           f"pair's composite modulus; coupling on), τ = t', {n}², {steps} steps, end to end, "
@@ -160,6 +181,17 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
               f"{int(ds.attrs.get('preload_estimate_fft_pairs', 0))}), "
               f"{ds.iterations.values.mean():.0f} iterations per step, "
               f"{ds.coupling_passes.values[1:].mean():.1f} coupling passes; {ds.attrs['models']}")
+        rows.append(dict(case="paper-fig3", pair="rigid/Maxwell", form=form, grid=n,
+                         steps=steps, wall_s=wall, floor_ms=floor,
+                         fft_pairs=int(ds.fft_pairs.values.sum()),
+                         fft_pairs_per_step=ds.fft_pairs.values.sum() / (steps + 1),
+                         fft_pairs_per_step_after_first=ds.fft_pairs.values[1:].mean(),
+                         first_instant_fft_pairs=int(ds.fft_pairs.values[0]),
+                         preload_estimate_fft_pairs=int(
+                             ds.attrs.get("preload_estimate_fft_pairs", 0)),
+                         iterations_per_step=ds.iterations.values.mean(),
+                         passes_per_step=ds.coupling_passes.values[1:].mean()))
+    return rows
 
 
 def bench_long_run(backend, threads, n=256, steps=2000):
@@ -177,6 +209,8 @@ def bench_long_run(backend, threads, n=256, steps=2000):
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"long run: {n}², {steps} steps streamed to disk in {wall:.0f} s, archive "
           f"{size / 2**20:.0f} MiB, peak resident memory {peak:.0f} MiB")
+    return [dict(case="long-run", pair="rigid/Maxwell", form="normal", grid=n, steps=steps,
+                 wall_s=wall, archive_mib=size / 2 ** 20, peak_rss_mib=peak)]
 
 
 CASES = {"normal": bench_normal, "fretting": bench_fretting, "memory": bench_memory,
