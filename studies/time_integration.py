@@ -30,9 +30,11 @@ Parts, each printed as a table:
    0.8 a (t >= 0.5 tau) against Lee-Radok p(r, t), a^3 from the approach; Kelvin-Voigt on
    the issue's 96^2 over 1.6 mm with 40 steps, Zener 100 on 96^2 auto with 20 steps (0.1
    tau), the others on 48^2 auto with 20 steps;
-4. the order of the pressure FIELD in dt, on a rigid punch with a spherical face held in
-   full contact (no cell enters or leaves), 16^2, W = 1 -> 1.5 kN: observed order from 20
-   / 40 / 80 / 160 steps;
+4. the pressure FIELD in dt: on the sphere of part 3 (96^2 auto; "bdf2" for Kelvin-Voigt
+   and Zener 100, "linear" for the others), the successive differences at 20 / 40 / 80 /
+   160 steps over the grid and inside 0.8 a; and the order on a rigid punch with a
+   spherical face held in full contact (no cell enters or leaves), 16^2, W = 1 -> 1.5 kN,
+   from 20 / 40 / 80 / 160 steps;
 5. a varying Poisson ratio (shear creep, elastic bulk, nu0 = 0.3; Maxwell and the Prony
    series, 48^2, 20 steps): the Lee-Radok measures of part 3 with the normal compliance
    (1 - nu(t))/G(t), and the contact radius at 2 tau against constant nu;
@@ -310,6 +312,40 @@ def punch_rows(quick, folder):
     return rows
 
 
+def sphere_front_rows(quick):
+    """The sphere's field in dt: successive differences of the Lee-Radok step load's
+    pressure at 20 / 40 / 80 / 160 steps (96² auto), largest over the grid and over inside
+    0.8 a(t), over p_max, for t >= 0.25 tau (Kelvin-Voigt 0.5 tau), and where the largest
+    sits (r/a). One rule per law at every step: "bdf2" for Kelvin-Voigt and Zener 100,
+    "linear" for the others ("auto" would switch Zener 100 to "linear" at 160 steps)."""
+    n, steps = (24, (10, 20, 40)) if quick else (96, (20, 40, 80, 160))
+    rows = []
+    for law in (("maxwell", "kelvin_voigt") if quick else LAWS):
+        rule = "bdf2" if law in ("kelvin_voigt", "zener100") else "linear"
+        with use_memory(rule):
+            runs = [cp.simulate(lee_radok_scene(law, n, s)) for s in steps]
+        x1, x2 = runs[0].x1.values, runs[0].x2.values
+        r = np.hypot(*np.meshgrid(x1, x2, indexing="ij"))
+        p = [ds.p.values[:: 2 ** i] for i, ds in enumerate(runs)]
+        t = np.linspace(0.0, 2.0, steps[0] + 1)
+        late = t >= (0.5 if law == "kelvin_voigt" else 0.25)
+        a = np.sqrt((p[-1][late] > 0).sum(axis=(1, 2)) / math.pi) * (x1[1] - x1[0])
+        inside = r[None] < 0.8 * a[:, None, None]
+        p_max = p[-1][late].max()
+        whole, inner, where = [], [], []
+        for i in range(len(p) - 1):
+            d = np.abs(p[i][late] - p[i + 1][late])
+            k = np.unravel_index(d.argmax(), d.shape)
+            whole.append(d.max() / p_max)
+            inner.append((d * inside).max() / p_max)
+            where.append(r[k[1], k[2]] / a[k[0]])
+        rows.append(dict(part="sphere_front", law=law, rule=rule, grid=n, steps=steps[-1],
+                         value=whole[-1], errors=" ".join(f"{e:.2e}" for e in whole),
+                         inside=" ".join(f"{e:.2e}" for e in inner),
+                         front_at=" ".join(f"{w:.2f}" for w in where)))
+    return rows
+
+
 # --------------------------------------------------------------------------- output
 # --------------------------------------------------------------------------- 5: nu(t)
 def poisson_rows(quick):
@@ -418,6 +454,12 @@ def print_tables(rows):
         if r["part"] == "scalar":
             print(f"  {r['law']:13s} {r['rule']:11s} {r['solves']:4d} solves: errors "
                   f"{r['errors']}, order {r['order']:.2f}")
+    print("\n4. Pressure field of the sphere (Lee-Radok step load): successive "
+          "differences over p_max, whole grid | inside 0.8 a | where the largest is (r/a)")
+    for r in rows:
+        if r["part"] == "sphere_front":
+            print(f"  {r['law']:13s} {r['rule']:7s} {r['grid']}^2 {r['errors']} | "
+                  f"{r['inside']} | {r['front_at']}")
     print("\n4. Pressure field of the rounded punch: successive differences and order")
     for r in rows:
         if r["part"] == "punch_order":
@@ -514,6 +556,7 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as folder:
         rows += lee_radok_rows(args.quick, keep)
         rows += punch_rows(args.quick, folder)
+    rows += sphere_front_rows(args.quick)
     rows += poisson_rows(args.quick)
     rows += preload_rows(args.quick)
     print_tables(rows)
