@@ -1,4 +1,4 @@
-"""A mapped friction coefficient mu(x1, x2) read from a netCDF file (docs/scene-file.md, [friction]).
+"""A mapped friction coefficient mu(x1, x2) read from a netCDF file (docs/scene-file.md).
 
 ``[friction] mu`` is a number or the name of a netCDF file holding a variable ``mu`` over
 the dimensions ``x1``, ``x2`` (coordinates in m, any order), on the scene's grid or

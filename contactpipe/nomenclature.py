@@ -1,8 +1,8 @@
 """One table: every archive variable -> dims, units, long_name, storage type.
 
-The names follow the paper's notation (docs/archive.md lists them). Everything that labels a result
-(:mod:`contactpipe.archive`, :mod:`contactpipe.results`, sweeps) reads this table; nothing
-else spells a unit or a long name.
+The names follow the paper's notation (docs/archive.md lists them). Everything that labels
+a result (:mod:`contactpipe.archive`, :mod:`contactpipe.results`, sweeps) reads this
+table; nothing else spells a unit or a long name.
 
 Keys of each entry
 ------------------

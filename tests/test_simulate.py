@@ -1,4 +1,5 @@
-"""simulate(): the archive's Dataset (docs/archive.md), streaming archives, options, errors, CLI run."""
+"""simulate(): the archive's Dataset (docs/archive.md), streaming archives, options, errors,
+CLI run."""
 import subprocess
 import sys
 

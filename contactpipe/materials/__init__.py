@@ -4,9 +4,8 @@ By default a viscoelastic body has a constant Poisson ratio, so its creep functi
 as ``Phi(t) = (1 + nu) / E * phi(t)`` (paper eq. 9; the paper's Phi is half the shear
 creep compliance J(t) = phi(t)/G = 2 (1 + nu) phi(t)/E), where ``E`` is the
 *instantaneous* (glassy) Young modulus and ``phi`` the normalised creep function
-(phi(0) = 1).  The one
-exception is Kelvin-Voigt, which has no instantaneous elasticity: there ``E`` is the
-long-term modulus and phi(t) = 1 - exp(-t/tau) starts at zero.
+(phi(0) = 1).  The one exception is Kelvin-Voigt, which has no instantaneous elasticity:
+there ``E`` is the long-term modulus and phi(t) = 1 - exp(-t/tau) starts at zero.
 
 With ``bulk = "elastic"`` (:class:`Body`) phi is the shear creep compliance instead,
 J(t) = phi(t)/G, while the bulk modulus K = E/(3(1 - 2 nu)) keeps the value it has where

@@ -414,7 +414,7 @@ def read_sweep_file(path) -> SweepFile:
 
 
 def load_sweep_file(path):
-    """(base Scene, axes, mode) of a sweep file (docs/scene-file.md); see :func:`read_sweep_file`."""
+    """(base Scene, axes, mode) of a sweep file (docs/scene-file.md); :func:`read_sweep_file`."""
     sf = read_sweep_file(path)
     return sf.base, sf.axes, sf.mode
 

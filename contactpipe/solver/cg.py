@@ -29,8 +29,9 @@ iterate, which near convergence it no longer does.
 General constraint rows (:class:`Constraints`): the force row Σx = S generalises to up to
 three rows ``C x = f`` (paper eqs. 1-2: the force and the moments of the pressure, or the
 shear's forces and torque), whose multipliers are the rigid motions (ω3, φ1, φ2) or
-(Δω1, Δω2, Δφ3) (docs/conventions.md, the six freedoms). Each iteration fits the multipliers to the working set by
-least squares (an m x m system, m <= 3), so the search direction keeps C x fixed, and
+(Δω1, Δω2, Δφ3) (docs/conventions.md, the six freedoms). Each iteration fits the
+multipliers to the working set by least squares (an m x m system, m <= 3), so the search
+direction keeps C x fixed, and
 the constraints are restored after a projection by the Euclidean projection of the free
 cells onto {bounds, C x = f}: a damped dual Newton iteration on the m multipliers
 (:func:`project_rows`). With no row at all
