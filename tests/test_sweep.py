@@ -23,6 +23,8 @@ from contactpipe.pipeline.sweep import (SweepLockedError, open_sweep,
                                register_parameter, sweep, with_window)
 from contactpipe.testing import TINY_SCENES
 
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
 # the module (``contactpipe.pipeline.sweep`` the attribute is the function)
 sweep_mod = importlib.import_module("contactpipe.pipeline.sweep")
 parameters_mod = importlib.import_module("contactpipe.pipeline.parameters")
@@ -427,3 +429,97 @@ def test_members_on_their_own_grids(tmp_path):
     assert float(side.sel(tau_ratio=2.0)) > float(side.sel(tau_ratio=0.5))
     assert not bool(np.isnan(sw.p.values).any())
     assert "per member" in sw.attrs["sweep_grid"]
+
+
+# --------------------------------------------------------------------------- scripts
+
+SCRIPT = textwrap.dedent("""
+    import contactpipe as cp
+    from contactpipe.testing import TINY_SCENES
+    {guard}
+    base = cp.Scene.from_toml_text(TINY_SCENES["creep"])
+    res = cp.sweep(base, {{"friction.mu": [0.1, 0.2]}}, "out", n_workers=1, progress=False)
+    print(res.summary())
+""")
+
+
+def run_script(tmp_path, guard: bool):
+    text = SCRIPT.format(guard="if __name__ == '__main__':" if guard else "")
+    if guard:        # the body indented under the guard
+        head, body = text.split("if __name__ == '__main__':\n")
+        text = head + "if __name__ == '__main__':\n" + textwrap.indent(body, "    ")
+    script = tmp_path / "study.py"
+    script.write_text(text)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
+    return subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
+                          text=True, env=env, timeout=600)
+
+
+def test_a_script_without_the_main_guard_says_so_in_one_line(tmp_path):
+    """A script that calls cp.sweep at its top level, run as `python study.py`: the
+    LocalCluster's worker imports it again, and that import stops with one line naming the
+    guard (not a lock error); the script fails naming the guard too, and no member ran."""
+    res = run_script(tmp_path, guard=False)
+    assert res.returncode == 1
+    line = ("contactpipe: error: cp.sweep was called while a worker process re-imported "
+            "your script; put the call under if __name__ == \"__main__\":")
+    assert res.stderr.splitlines()[0] == line, res.stderr
+    assert "holds the lock" not in res.stderr and "SweepLockedError" not in res.stderr
+    assert res.stderr.strip().splitlines()[-1].startswith(
+        "contactpipe.exceptions.ContactpipeError: the LocalCluster's 1 worker process(es) "
+        "failed to start")
+    assert 'must be called under if __name__ == "__main__":' in res.stderr.splitlines()[-1]
+    assert not list((tmp_path / "out").glob("*.nc"))
+
+
+@pytest.mark.slow
+def test_the_readme_guard_lets_the_script_sweep(tmp_path):
+    """The same script under `if __name__ == "__main__":` (as the README shows) runs both
+    members."""
+    res = run_script(tmp_path, guard=True)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.startswith("2 members: 2 computed, 0 skipped, 0 failed")
+
+
+# --------------------------------------------------------------------------- scratch
+
+def test_members_sent_back_are_simulated_in_the_worker_scratch_and_swept(tmp_path,
+                                                                           monkeypatch):
+    """A member simulated away from out_dir (shared_disk=False) is written under the
+    worker's local directory, not the system's temporary folder; a worker killed mid-run
+    (SIGKILL) leaves its scratch folder there, and the next member removes it."""
+    local = tmp_path / "local"
+    scene_file = tmp_path / "scene.toml"
+    scene_file.write_text(TINY_SCENES["creep"].replace("steps = 10", "steps = 400"))
+    runner = textwrap.dedent("""
+        import os, signal, sys, types
+        import distributed
+        from contactpipe.pipeline import execute
+        from contactpipe.scene import Scene
+        worker = types.SimpleNamespace(local_directory=sys.argv[2])
+        distributed.get_worker = lambda: worker
+        def step(k, t, rec):
+            if k == 5:
+                os.kill(os.getpid(), signal.SIGKILL)     # a worker killed mid-member
+        real = execute.simulate
+        execute.simulate = lambda *a, **kw: real(*a, **{**kw, "on_step": step})
+        execute._simulate(Scene.from_toml(sys.argv[1]), None)
+    """)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
+    proc = subprocess.Popen([sys.executable, "-c", runner, str(scene_file), str(local)],
+                            stderr=subprocess.PIPE, text=True, env=env)
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode == -signal.SIGKILL, err
+    left = list(local.iterdir())
+    assert len(left) == 1 and left[0].name.startswith(f"contactpipe-member-{proc.pid}-")
+    assert [p.name for p in left[0].iterdir()][0].startswith(".member.nc.")
+    import distributed
+    from contactpipe.pipeline import execute
+    monkeypatch.setattr(distributed, "get_worker",
+                        lambda: type("W", (), {"local_directory": str(local)})())
+    assert execute.scratch_root() == local
+    data = execute._simulate(Scene.from_toml_text(TINY_SCENES["creep"]), None)
+    assert data[:4] == b"\x89HDF"
+    assert list(local.iterdir()) == []

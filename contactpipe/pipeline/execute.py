@@ -14,8 +14,12 @@ Where the archives are written (``shared_disk``)
     Each worker simulates straight into ``out_dir``: it must see that folder at the same
     path (the same machine, or a shared filesystem). Nothing travels but the outcome.
 ``False``
-    Each worker simulates into a temporary folder of its own (under its ``TMPDIR``) and
-    sends the archive's bytes back; the client checks them (a complete archive of the
+    Each worker simulates into a scratch folder of its own,
+    ``contactpipe-member-<pid>-<host>-<token>`` in its dask local directory (``dask worker
+    --local-directory``; outside a worker, dask's ``temporary-directory`` or the system's
+    temporary folder), and sends the archive's bytes back; the scratch folders that
+    killed workers left there are removed by the next member simulated there (and dask
+    removes a dead worker's local directory when a new worker starts); the client checks them (a complete archive of the
     member's own scene: :func:`land_member`) and writes them atomically into ``out_dir``.
     Workers are never told ``out_dir``. Each archive then travels through the scheduler's
     network and is held in memory once on the worker and once on the client: for archives
@@ -38,6 +42,9 @@ import concurrent.futures
 import contextlib
 import os
 import pathlib
+import shutil
+import socket
+import sys
 import tempfile
 import time
 
@@ -50,7 +57,7 @@ from ..simulation import simulate
 from .inputs import scene_digest
 
 __all__ = ["execute", "run_member", "land_member", "dask_client", "workers_share_disk",
-           "SYNCHRONOUS"]
+           "scratch_root", "clean_scratch", "SYNCHRONOUS", "SCRATCH_PREFIX"]
 
 SYNCHRONOUS = "synchronous"
 
@@ -68,13 +75,64 @@ def workers_share_disk(shared_disk, client, scheduler) -> bool:
     return isinstance(getattr(client, "cluster", None), LocalCluster)
 
 
+#: Prefix of the scratch folder of a member simulated away from ``out_dir``
+#: (``contactpipe-member-<pid>-<host>-<token>``).
+SCRATCH_PREFIX = "contactpipe-member-"
+
+
+def _host() -> str:
+    """This machine's name, as a file name can hold it."""
+    return "".join(c if c.isalnum() else "_" for c in socket.gethostname()) or "host"
+
+
+def scratch_root() -> pathlib.Path:
+    """Where a worker simulates a member it sends back: its dask local directory (the
+    ``--local-directory`` of ``dask worker``), else dask's ``temporary-directory``
+    setting, else the system's temporary folder."""
+    try:
+        from distributed import get_worker
+        return pathlib.Path(get_worker().local_directory)
+    except (ImportError, ValueError):        # not in a dask worker
+        pass
+    import dask
+    return pathlib.Path(dask.config.get("temporary-directory", None) or tempfile.gettempdir())
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:                          # another user's: alive
+        return True
+    return True
+
+
+def clean_scratch(root) -> list:
+    """Remove the scratch folders of this machine in ``root`` whose process is gone (a
+    killed worker's partial archives); returns their names."""
+    removed = []
+    for d in pathlib.Path(root).glob(f"{SCRATCH_PREFIX}*"):
+        pid, _, rest = d.name[len(SCRATCH_PREFIX):].partition("-")
+        if d.is_dir() and pid.isdigit() and rest.startswith(f"{_host()}-") \
+                and not _alive(int(pid)):
+            shutil.rmtree(d, ignore_errors=True)
+            removed.append(d.name)
+    return removed
+
+
 def _simulate(scene, path) -> bytes | None:
-    """Simulate ``scene`` into ``path``; with no path, into a temporary folder of this
-    process, returning the archive's bytes."""
+    """Simulate ``scene`` into ``path``; with no path, into a scratch folder of this
+    process under :func:`scratch_root` (those of killed processes removed first),
+    returning the archive's bytes."""
     if path is not None:
         simulate(scene, path, progress=False).close()
         return None
-    with tempfile.TemporaryDirectory(prefix="contactpipe-member-") as tmp:
+    root = scratch_root()
+    root.mkdir(parents=True, exist_ok=True)
+    clean_scratch(root)
+    with tempfile.TemporaryDirectory(prefix=f"{SCRATCH_PREFIX}{os.getpid()}-{_host()}-",
+                                     dir=root) as tmp:
         target = pathlib.Path(tmp) / "member.nc"
         simulate(scene, target, progress=False).close()
         return target.read_bytes()
@@ -148,6 +206,20 @@ def land_member(result: dict, path) -> dict:
     return result
 
 
+def _from_a_script() -> bool:
+    """Whether the top level of a script (``python script.py``) is on the call stack:
+    the spawned workers of a LocalCluster import that script again."""
+    main = sys.modules.get("__main__")
+    if not getattr(main, "__file__", None):
+        return False                  # an interactive session, a notebook, python -c
+    frame = sys._getframe(1)
+    while frame is not None:
+        if frame.f_code.co_name == "<module>" and frame.f_globals is vars(main):
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _cpu_count() -> int:
     try:
         return len(os.sched_getaffinity(0))
@@ -177,8 +249,15 @@ def dask_client(client, scheduler, n_workers, threads_per_worker, n_jobs):
             c.close()
         return
     n = int(n_workers) if n_workers else max(1, min(n_jobs, _cpu_count()))
-    cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=int(threads_per_worker),
-                                       processes=True, dashboard_address=None)
+    try:
+        cluster = distributed.LocalCluster(n_workers=n,
+                                           threads_per_worker=int(threads_per_worker),
+                                           processes=True, dashboard_address=None)
+    except (RuntimeError, OSError, TimeoutError) as err:
+        hint = (" (the workers import this script again: the sweep must be called under "
+                "if __name__ == \"__main__\":)" if _from_a_script() else "")
+        raise ContactpipeError(f"the LocalCluster's {n} worker process(es) failed to "
+                               f"start: {one_line(err)}{hint}") from None
     try:
         c = distributed.Client(cluster)
         try:

@@ -80,8 +80,11 @@ running scheduler (``"tcp://host:8786"``) or ``"synchronous"`` (in this process,
 member after the other: debugging and tests); else a :class:`distributed.LocalCluster` of
 ``n_workers`` processes (default ``min(members to compute, CPU count)``) with
 ``threads_per_worker`` threads, started and closed by the sweep, and only when there is
-something to compute. Its worker processes are spawned, so a script that lets the sweep
-start one needs the usual ``if __name__ == "__main__":`` guard.
+something to compute. Its worker processes are spawned: each imports the calling script
+again, so a script that lets the sweep start one needs the usual
+``if __name__ == "__main__":`` guard. Without it, the sweep called again by a worker's
+import ends that worker with one line saying so (:class:`ScriptReimportError`) and the
+sweep fails to start its cluster with one line naming the guard.
 
 The workers need not share the client's disk: with ``shared_disk=None`` (the default)
 the workers of a LocalCluster (or of ``"synchronous"``) write the archives into
@@ -121,6 +124,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import multiprocessing
 import os
 import pathlib
 import stat
@@ -142,7 +146,7 @@ from .parameters import (derived_parameters, register_parameter, relaxation_time
                          tau_ratio, with_window)
 
 __all__ = ["sweep", "open_sweep", "open_member", "SweepResult", "Member",
-           "SweepLockedError", "register_parameter", "derived_parameters",
+           "SweepLockedError", "ScriptReimportError", "register_parameter", "derived_parameters",
            "relaxation_time", "with_window", "tau_ratio", "load_sweep_file",
            "read_sweep_file", "SweepFile", "read_manifest", "archive_state",
            "add_arguments", "main", "MANIFEST", "LOCK", "MODES", "SYNCHRONOUS"]
@@ -154,6 +158,32 @@ STATES = ("valid", "missing", "broken", "foreign")
 
 class SweepLockedError(LockedError):
     """Another sweep (or pipeline) holds the lock of this output folder."""
+
+
+class ScriptReimportError(SystemExit):
+    """:func:`sweep` was called by a worker process while it imported the user's script
+    again (a script without the ``if __name__ == "__main__":`` guard). It ends that
+    process with one line (a :class:`SystemExit`, so no traceback): it must not sweep."""
+
+
+#: The one line of :class:`ScriptReimportError`.
+REIMPORT_MESSAGE = ("contactpipe: error: cp.sweep was called while a worker process "
+                    "re-imported your script; put the call under "
+                    "if __name__ == \"__main__\":")
+
+
+def _refuse_in_reimport() -> None:
+    """Raise :class:`ScriptReimportError` when called from the top level of a script that
+    a spawned worker process is importing again (``multiprocessing`` runs it as
+    ``__mp_main__``)."""
+    if multiprocessing.current_process().name == "MainProcess":   # named before the import
+        return
+    frame = sys._getframe(1)
+    while frame is not None:
+        if frame.f_code.co_name == "<module>" and \
+                frame.f_globals.get("__name__") == "__mp_main__":
+            raise ScriptReimportError(REIMPORT_MESSAGE)
+        frame = frame.f_back
 
 
 @dataclasses.dataclass
@@ -354,7 +384,15 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
         ``out_dir`` exists and is not a folder (a file, a device), before any work.
     SweepLockedError
         Another sweep is running on ``out_dir``.
+    ScriptReimportError
+        Called while a worker process imports the calling script again (a script that
+        starts a LocalCluster needs the ``if __name__ == "__main__":`` guard): that
+        process ends with one line saying so.
+    ContactpipeError
+        The LocalCluster's workers failed to start (the message names the guard when
+        the sweep was called from the top level of a script).
     """
+    _refuse_in_reimport()
     t0 = time.perf_counter()
     out_dir = check_output_dir(out_dir, "sweep output folder", inputs=_paths(base))
     if not isinstance(base, Scene):
