@@ -24,6 +24,7 @@ import json
 import os
 import pathlib
 import secrets
+import signal
 import stat
 import sys
 
@@ -98,11 +99,39 @@ def fsync_dir(folder) -> None:
         os.close(fd)
 
 
-def publish(tmp, target) -> None:
-    """fsync a finished temporary file and rename it onto ``target`` (atomic)."""
+#: Signals held back from this thread between the last check and the rename of
+#: :func:`publish` (Unix).
+_HELD = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Hold back the interrupting signals from this thread (where it can): one that comes
+    meanwhile is delivered on leaving."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def publish(tmp, target, check=None) -> None:
+    """fsync a finished temporary file and rename it onto ``target`` (atomic).
+
+    ``check``, when given, is called last before the rename, with the interrupting
+    signals held back from this thread until the rename is done: a caller's
+    ``check`` that raises for a signal received (a deferred Ctrl-C) stops the
+    publication, and a signal that comes later finds the file published.
+    """
     tmp, target = pathlib.Path(tmp), pathlib.Path(target)
     fsync_file(tmp)
-    os.replace(tmp, target)
+    with _signals_held():
+        if check is not None:
+            check()
+        os.replace(tmp, target)
     fsync_dir(target.parent)
 
 

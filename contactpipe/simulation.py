@@ -37,7 +37,7 @@ from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resu
 from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
                          OutputPathError, SceneError, one_line)
 from .files import LockedError, check_output_path, exclusive_lock
-from .interrupts import Interrupted, raise_if_signalled, signals_as_interrupt
+from .interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
 from .materials import dundurs_beta
 from .nomenclature import variables_for
 from .planning import check_resources, estimate_resources, plan as make_plan
@@ -50,7 +50,7 @@ from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
                               history_displacement, history_kernels)
 
 __all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
-           "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
+           "ResumeNotice", "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
 
 #: Knots listed by the off-mesh warning; the others are counted.
 KNOTS_LISTED = 5
@@ -70,6 +70,10 @@ class ResumeLockedError(LockedError):
 
 class ResumeWarning(UserWarning):
     """The resume state of a target was damaged or unusable: the run starts afresh."""
+
+
+class ResumeNotice(UserWarning):
+    """Where a resumable run starts: the instant of its checkpoint, or the first one."""
 
 
 def grid_coordinates(scene):
@@ -641,8 +645,9 @@ def _warn_off_knots(scene, steps):
 def _start(pb, path, attrs, ckpt):
     """The writer and the state to march from: fresh, or a checkpoint's (resumable runs).
 
-    A damaged resume state (unreadable checkpoint, truncated or inconsistent part file) is
-    dropped with a :class:`ResumeWarning`, and the run starts afresh.
+    A resumable run says where it starts (:class:`ResumeNotice`) when it finds a resume
+    state. A damaged resume state (unreadable checkpoint, truncated or inconsistent part
+    file) is dropped with a :class:`ResumeWarning`, and the run starts afresh.
     """
     out = pb.scene.output
     names = variables_for(pb.tang)
@@ -654,6 +659,7 @@ def _start(pb, path, attrs, ckpt):
         return MemoryWriter(None, pb.x1, pb.x2, names, attrs,
                             capacity=pb.written(pb.t.size - 1), **kw), st
     if ckpt is not None:
+        found = ckpt.found()
         try:
             saved = ckpt.load()
             if saved is not None:
@@ -662,8 +668,16 @@ def _start(pb, path, attrs, ckpt):
                     raise ValueError(f"instant {k} with {written} written does not fit the "
                                      f"scene's {pb.t.size} instants")
                 st.restore(saved, k)
-                return ArchiveWriter(path, pb.x1, pb.x2, names, attrs, resumable=True,
-                                     resume_steps=written, **kw), st
+                writer = ArchiveWriter(path, pb.x1, pb.x2, names, attrs, resumable=True,
+                                       resume_steps=written, **kw)
+                warnings.warn(ResumeNotice(f"{path.name}: resuming from {_instant(pb, k)}, "
+                                           f"its checkpoint ({written} instants written)"),
+                              stacklevel=4)
+                return writer, st
+            if found:
+                warnings.warn(ResumeNotice(f"{path.name}: no checkpoint of this scene to "
+                                           f"resume from; starting from the first instant"),
+                              stacklevel=4)
         except (ArchiveError, ValueError, KeyError) as e:
             warnings.warn(ResumeWarning(f"{path}: the resume state is damaged "
                                         f"({one_line(e, with_type=False)}); starting afresh"),
@@ -674,35 +688,62 @@ def _start(pb, path, attrs, ckpt):
                          **kw), st
 
 
+def _instant(pb, k) -> str:
+    """``instant 155 of 300 (t = 0.516 s)``: where a resumable run stands."""
+    return f"instant {k} of {pb.t.size - 1} (t = {float(pb.t[k]):.6g} s)"
+
+
+def _checkpoint_on_interrupt(pb, writer, ckpt, st, whole, saved, err):
+    """Checkpoint the instant ``whole`` the run completed (None: stopped inside an
+    instant, the last checkpoint ``saved`` stands) and tell ``err`` where a resume
+    continues."""
+    if whole is not None and whole != saved:
+        writer.flush()
+        ckpt.save(whole, writer.steps, st.arrays())
+        saved = whole
+    err.resume_from = _instant(pb, saved) if saved is not None else "the first instant"
+
+
 def _progress(scene, total, initial):
     from tqdm.auto import tqdm          # only with progress=True: tqdm is optional here
     return tqdm(total=total, initial=initial, desc=scene.name, unit="step")
 
 
 def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds, wall0):
-    """Every instant from the start state to the end; the archive (or Dataset)."""
+    """Every instant from the start state to the end; the archive (or Dataset).
+
+    A signal is acted on between two instants (:func:`contactpipe.interrupts.deferred`),
+    where the state is whole: a resumable run checkpoints the instant it reached, then
+    stops; and just before the archive is renamed into place (nothing is published).
+    """
     writer, st = _start(pb, path, pb.attrs(accuracy_note), ckpt)
     stride, last = int(pb.scene.output.stride), pb.t.size - 1
     bar = _progress(pb.scene, pb.t.size, st.k + 1) if progress else None
     last_ckpt = _time.perf_counter()
+    # whole: the last instant whose state and record are complete (None inside an instant)
+    whole = saved = st.k if st.k >= 0 else None
     try:
-        for k in range(st.k + 1, pb.t.size):
-            raise_if_signalled()
-            record = _step(pb, st, k)
-            if k % stride == 0 or k == last:
-                writer.append(pb.t[k], record)
-            if on_step is not None:
-                on_step(k, float(pb.t[k]), record)
-            if bar is not None:
-                bar.update(1)
-            if ckpt is not None and _time.perf_counter() - last_ckpt > checkpoint_seconds:
-                writer.flush()
-                ckpt.save(k, writer.steps, st.arrays())
-                last_ckpt = _time.perf_counter()
-        result = writer.close({"wall_time_s": _time.perf_counter() - wall0})
-    except KeyboardInterrupt:           # Ctrl-C, SIGTERM, SIGHUP
-        if ckpt is not None:
-            writer.suspend()            # keep the part file and the last checkpoint
+        with deferred():
+            for k in range(st.k + 1, pb.t.size):
+                raise_if_signalled()
+                whole = None
+                record = _step(pb, st, k)
+                if k % stride == 0 or k == last:
+                    writer.append(pb.t[k], record)
+                whole = k
+                if on_step is not None:
+                    on_step(k, float(pb.t[k]), record)
+                if bar is not None:
+                    bar.update(1)
+                if ckpt is not None and _time.perf_counter() - last_ckpt > checkpoint_seconds:
+                    writer.flush()
+                    ckpt.save(k, writer.steps, st.arrays())
+                    saved, last_ckpt = k, _time.perf_counter()
+            result = writer.close({"wall_time_s": _time.perf_counter() - wall0})
+    except KeyboardInterrupt as err:    # Ctrl-C, SIGTERM, SIGHUP
+        if ckpt is not None:            # keep the part file and checkpoint what was reached
+            _checkpoint_on_interrupt(pb, writer, ckpt, st, whole, saved, err)
+            writer.suspend()
         else:
             writer.abort()
         raise
@@ -805,9 +846,10 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
             return open_archive(_march(_Problem(scene, pl, fft, threads), path, None, *opts))
         lock = resume_lock(path)
         with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
+            ckpt = Checkpoint(path, scene.digest())
+            ckpt.clean()                # what a run killed while checkpointing left
             try:
-                result = _march(_Problem(scene, pl, fft, threads), path,
-                                Checkpoint(path, scene.digest()), *opts)
+                result = _march(_Problem(scene, pl, fft, threads), path, ckpt, *opts)
             finally:
                 lock.unlink(missing_ok=True)
         return open_archive(result)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe.simulation import ResumeWarning
+from contactpipe.simulation import ResumeNotice, ResumeWarning
 from contactpipe.testing import TINY_SCENES
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -105,10 +105,14 @@ def assert_same_run(ds, reference):
 
 
 def test_ctrl_c_then_resume_continues(tmp_path):
+    """Ctrl-C after instant 8 checkpoints instant 8 (the state between two instants is
+    whole), and the resume says it continues from there."""
     scene, target, part, ckpt = interrupted(tmp_path)
     with np.load(ckpt) as z:
-        assert int(z["k"]) == 7 and int(z["written"]) == 8      # the last saved instant
-    ds = cp.simulate(scene, target, resume=True)
+        assert int(z["k"]) == 8 and int(z["written"]) == 9      # the instant reached
+    with pytest.warns(ResumeNotice, match=r"run\.nc: resuming from instant 8 of 20 "
+                                          r"\(t = 0\.4 s\), its checkpoint \(9 instants"):
+        ds = cp.simulate(scene, target, resume=True)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc"]
     assert_same_run(ds, cp.simulate(scene))
 
@@ -191,3 +195,108 @@ def test_a_checkpoint_without_the_increments_resumes(tmp_path):
         warnings.simplefilter("error", ResumeWarning)     # resumed, not started afresh
         ds = cp.simulate(scene, target, resume=True)
     assert_same_run(ds, cp.simulate(scene))
+
+
+# --------------------------------------------------------------------------- the command line
+
+#: `contactpipe run` whose simulate sends itself SIGTERM right after instant STOP_AT (the
+#: checkpoint cadence stays the default 30 s: none falls due in so short a run).
+SIGNALLING_RUNNER = textwrap.dedent("""
+    import os, signal, sys
+    import contactpipe.pipeline.cli as cli
+    real, stop = cli.simulate, int(os.environ["STOP_AT"])
+    def simulate(*args, **kwargs):
+        def on_step(k, t, record):
+            if k == stop:
+                os.kill(os.getpid(), signal.SIGTERM)
+        return real(*args, on_step=on_step, **kwargs)
+    cli.simulate = simulate
+    sys.exit(cli.main(sys.argv[1:]))
+""")
+
+
+def test_sigterm_checkpoints_the_instant_reached_and_resume_says_so(tmp_path):
+    """SIGTERM after instant 23 of 40 (long before the 30 s checkpoint falls due): the run
+    checkpoints instant 23, exits 143 saying where --resume continues; the resume says it
+    starts from instant 23 (not 0) and ends equal to an uninterrupted run (1e-7 of each
+    variable's scale)."""
+    scene = cp.Scene.from_toml_text(SCENE.replace("steps = 200", "steps = 40"))
+    scene_file = tmp_path / "scene.toml"
+    scene_file.write_text(scene.to_toml())
+    target = tmp_path / "run.nc"
+    env = {**os.environ, "STOP_AT": "23", "PYTHONPATH": os.pathsep.join(
+        [str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
+    args = ["run", str(scene_file), "-o", str(target), "--resume", "--no-progress"]
+    first = subprocess.run([sys.executable, "-c", SIGNALLING_RUNNER, *args],
+                           capture_output=True, text=True, env=env, timeout=600)
+    assert first.returncode == 143, first.stderr
+    assert first.stderr.strip() == ("contactpipe: interrupted (SIGTERM); --resume continues "
+                                    "from instant 23 of 40 (t = 0.575 s)")
+    with np.load(tmp_path / ".run.nc.ckpt.npz") as z:
+        assert int(z["k"]) == 23 and int(z["written"]) == 24
+    second = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", *args],
+                            capture_output=True, text=True, env=env, timeout=600)
+    assert second.returncode == 0, second.stderr
+    assert second.stderr.strip() == ("contactpipe: run.nc: resuming from instant 23 of 40 "
+                                     "(t = 0.575 s), its checkpoint (24 instants written)")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc", "scene.toml"]
+    ds = cp.open_archive(target, verify=True)
+    assert ds.sizes["time"] == 41
+    assert_same_run(ds, cp.simulate(scene))
+
+
+def test_a_checkpoint_killed_while_written_is_cleaned_up_by_the_resume(tmp_path):
+    """SIGKILL while a checkpoint is being written leaves its temporary file
+    (``..run.nc.ckpt.npz.<pid>-<token>.part``) beside the previous checkpoint; the
+    resumed run removes it and completes."""
+    scene = cp.Scene.from_toml_text(SCENE.replace("steps = 200", "steps = 20"))
+    scene_file = tmp_path / "scene.toml"
+    scene_file.write_text(scene.to_toml())
+    target = tmp_path / "run.nc"
+    runner = textwrap.dedent("""
+        import os, signal, sys, numpy as np, contactpipe as cp
+        real, saves = np.savez, []
+        def savez(f, **arrays):                   # only checkpoints call it here
+            saves.append(1)
+            if len(saves) == 6:                   # the sixth checkpoint: killed half-way
+                f.write(b"PK" * 1000)
+                f.flush()
+                os.kill(os.getpid(), signal.SIGKILL)
+            real(f, **arrays)
+        np.savez = savez
+        sc = cp.Scene.from_toml(sys.argv[1])
+        cp.simulate(sc, sys.argv[2], resume=True, checkpoint_seconds=0.0)
+    """)
+    proc = subprocess.run([sys.executable, "-c", runner, str(scene_file), str(target)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+    left = sorted(p.name for p in tmp_path.glob("..run.nc.ckpt.npz.*.part"))
+    assert len(left) == 1, sorted(p.name for p in tmp_path.iterdir())
+    with np.load(tmp_path / ".run.nc.ckpt.npz") as z:
+        assert int(z["k"]) == 4                     # the fifth checkpoint stands
+    with pytest.warns(ResumeNotice, match="resuming from instant 4 of 20"):
+        ds = cp.simulate(scene, target, resume=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.nc", "scene.toml"]
+    assert_same_run(ds, cp.simulate(scene))
+
+
+@pytest.mark.parametrize("which", ["part", "checkpoint"])
+def test_a_fifo_in_place_of_the_resume_state_is_refused(tmp_path, which):
+    """A FIFO where the part file or the checkpoint should be: one line naming it, exit 2,
+    at once (reading it would block for ever), the FIFO left alone."""
+    scene = cp.Scene.from_toml_text(SCENE.replace("steps = 200", "steps = 5"))
+    scene_file = tmp_path / "scene.toml"
+    scene_file.write_text(scene.to_toml())
+    name = ".run.nc.resumable.part" if which == "part" else ".run.nc.ckpt.npz"
+    os.mkfifo(tmp_path / name)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
+    res = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run",
+                          str(scene_file), "-o", str(tmp_path / "run.nc"), "--resume",
+                          "--no-progress"], capture_output=True, text=True, env=env,
+                         timeout=120)
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.strip() == (f"contactpipe: error: {tmp_path / name} is not a regular "
+                                  f"file (a FIFO, a device or a folder): a resumable run "
+                                  f"keeps its state there; remove it")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([name, "scene.toml"])

@@ -401,3 +401,107 @@ def test_off_knot_warning_stays_short_for_100000_cycles():
         with pytest.raises(cp.ContactpipeError):
             cp.simulate(scene.replace({"solver.max_iterations": 1}))
     assert all(len(str(w.message)) < 400 for w in record)
+
+
+# --------------------------------------------------------------------------- the publish
+
+#: `contactpipe run` several times in one process, each with Ctrl-C (SIGINT) sent at one
+#: moment around the archive's publication: MODE "readback" (while the written file is
+#: read back and checked), "fsync" (inside the publication, while the file is flushed to
+#: disk before its rename), "rename" (in the same instant as the rename: the signals are
+#: held back from the last check to the end of the rename), "after" (once the rename is
+#: done), or "timer" (from another thread, DELAY seconds after the publication starts, so
+#: that it lands anywhere in or after it). Prints "code=N" per run: its exit status.
+PUBLISH_RUNNER = r"""
+import os, signal, sys, threading
+import contactpipe.archive.writer as writer
+import contactpipe.files as files
+from contactpipe.pipeline.cli import main
+mode, scene, out, delays = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
+real_rename, real_problems, real_publish = os.replace, writer._written_problems, writer.publish
+real_fsync = files.fsync_file
+timer = []
+def kill():
+    os.kill(os.getpid(), signal.SIGINT)
+def problems(*args, **kwargs):
+    if mode == "readback":
+        kill()
+    return real_problems(*args, **kwargs)
+def fsync(path):
+    if mode == "fsync":
+        kill()
+    real_fsync(path)
+def rename(src, dst):
+    if mode == "rename":
+        kill()
+    real_rename(src, dst)
+    if mode == "after":
+        kill()
+def publish(*args, **kwargs):
+    if mode == "timer":
+        timer.append(threading.Timer(float(delays[run]), kill))
+        timer[-1].start()
+    real_publish(*args, **kwargs)
+    if timer:
+        timer.pop().join()         # the signal is sent before the run ends
+files.fsync_file = fsync
+writer._written_problems, writer.publish, files.os = problems, publish, type(
+    "os", (), {**{k: getattr(os, k) for k in dir(os) if not k.startswith("__")},
+               "replace": staticmethod(rename)})
+for run in range(len(delays) or 1):
+    code = main(["run", scene, "-o", os.path.join(out, f"run{run}.nc"), "--no-progress"])
+    print(f"code={code}", flush=True)
+"""
+
+
+def publish_runs(tmp_path, mode, delays=()):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(TINY_SCENES["creep"].replace("steps = 10", "steps = 2"))
+    out = tmp_path / "out"
+    out.mkdir()
+    res = subprocess.run([sys.executable, "-c", PUBLISH_RUNNER, mode, str(scene), str(out),
+                          *map(str, delays)], capture_output=True, text=True, env=env(),
+                         timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert "Exception ignored" not in res.stderr and "Traceback" not in res.stderr
+    codes = [int(w[5:]) for w in res.stdout.split() if w.startswith("code=")]
+    return codes, res.stderr.splitlines(), out
+
+
+@pytest.mark.parametrize("mode", ["readback", "fsync"])
+def test_ctrl_c_before_the_rename_publishes_nothing(tmp_path, mode):
+    """Ctrl-C while the archive is read back, or inside its publication before the rename
+    (its fsync): exit 130, one line, no archive and no temporary file."""
+    codes, lines, out = publish_runs(tmp_path, mode)
+    assert codes == [130]
+    assert lines == ["contactpipe: interrupted (SIGINT)"]
+    assert sorted(p.name for p in out.iterdir()) == []
+
+
+@pytest.mark.parametrize("mode", ["rename", "after"])
+def test_ctrl_c_after_the_rename_completes_the_run(tmp_path, mode):
+    """Ctrl-C once the archive is renamed into place (or in the instant of the rename,
+    held back until it is done): the run is complete (exit 0, a valid archive) and one
+    line says the signal came after the publication."""
+    codes, lines, out = publish_runs(tmp_path, mode)
+    assert codes == [0]
+    assert lines == ["contactpipe: SIGINT came after the output was published: the run "
+                     "is complete"]
+    assert sorted(p.name for p in out.iterdir()) == ["run0.nc"]
+    cp.open_archive(out / "run0.nc", verify=True)
+
+
+def test_ctrl_c_timed_around_the_publish_is_never_lost(tmp_path):
+    """Ctrl-C from another thread 0 to 3 ms after the publication starts (12 runs): each
+    run either exits 130 with no archive or exits 0 with a valid archive and the line
+    saying the signal came after; never 0 in silence, never a temporary file left."""
+    delays = [i * 2.5e-4 for i in range(12)]
+    codes, lines, out = publish_runs(tmp_path, "timer", delays)
+    assert len(codes) == 12 and set(codes) <= {0, 130}, codes
+    late = "contactpipe: SIGINT came after the output was published: the run is complete"
+    assert lines == [late if c == 0 else "contactpipe: interrupted (SIGINT)" for c in codes]
+    assert sorted(p.name for p in out.iterdir()) == [f"run{i}.nc" for i, c in
+                                                     enumerate(codes) if c == 0]
+    for i, c in enumerate(codes):
+        if c == 0:
+            cp.open_archive(out / f"run{i}.nc", verify=True)

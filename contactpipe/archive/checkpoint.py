@@ -10,17 +10,23 @@ A resumable run of ``DIR/NAME`` keeps three hidden files in ``DIR``:
   (:func:`resume_lock`), so that two runs on one target never mix their files.
 
 A checkpoint that cannot be read is reported as :class:`~contactpipe.exceptions.ArchiveError`
-(the caller starts afresh); one of another scene is ignored.
+(the caller starts afresh); one of another scene is ignored. A checkpoint or part file that
+is not a regular file (a FIFO, a device, a folder) is refused before it is opened
+(:class:`~contactpipe.exceptions.OutputPathError`): reading a FIFO would block for ever.
+The temporary files of a checkpoint being written when its process was killed
+(``.NAME.ckpt.npz.<pid>-<token>.part``) are removed by the next run (:meth:`Checkpoint.clean`).
 """
 from __future__ import annotations
 
+import os
 import pathlib
+import stat
 import zipfile
 
 import numpy as np
 
-from ..exceptions import ArchiveError, one_line
-from ..files import atomic_path
+from ..exceptions import ArchiveError, OutputPathError, one_line
+from ..files import atomic_path, temporaries
 from .schema import resumable_part
 
 __all__ = ["Checkpoint", "resume_lock"]
@@ -49,6 +55,32 @@ class Checkpoint:
         self.part = resumable_part(self.path)
         self.digest = str(digest)
 
+    def found(self) -> bool:
+        """Whether a resume state (a checkpoint or a part file) is there."""
+        return self._regular(self.file) or self._regular(self.part)
+
+    @staticmethod
+    def _regular(path: pathlib.Path) -> bool:
+        """Whether ``path`` exists; OutputPathError when it is not a regular file."""
+        try:
+            st = os.stat(path)
+        except FileNotFoundError:
+            return False
+        if not stat.S_ISREG(st.st_mode):
+            raise OutputPathError(f"{path} is not a regular file (a FIFO, a device or a "
+                                  f"folder): a resumable run keeps its state there; "
+                                  f"remove it")
+        return True
+
+    def clean(self) -> list:
+        """Remove the temporary files of checkpoints whose writing was killed (call only
+        while holding :func:`resume_lock`); returns their names."""
+        removed = []
+        for p in temporaries(self.file):
+            p.unlink(missing_ok=True)
+            removed.append(p.name)
+        return removed
+
     def load(self) -> dict | None:
         """The saved arrays (with ``k`` and ``written``), or None when there is nothing to
         resume (no checkpoint, no part file, or another scene's).
@@ -57,8 +89,12 @@ class Checkpoint:
         ------
         ArchiveError
             The checkpoint exists but cannot be read (truncated, not an npz, keys missing).
+        OutputPathError
+            The checkpoint or the part file is not a regular file (a FIFO, a device, a
+            folder); nothing is opened.
         """
-        if not (self.file.exists() and self.part.exists()):
+        have_file, have_part = self._regular(self.file), self._regular(self.part)
+        if not (have_file and have_part):
             return None
         try:
             with np.load(self.file, allow_pickle=False) as z:

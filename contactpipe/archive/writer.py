@@ -32,6 +32,7 @@ import xarray as xr
 
 from ..exceptions import ArchiveError, one_line
 from ..files import publish, temp_name
+from ..interrupts import raise_if_signalled
 from ..nomenclature import FIELD, MAP, MAPS, VARIABLES, cf_attrs
 from .content import content_problems
 from .schema import (
@@ -326,8 +327,9 @@ class ArchiveWriter(_StepWriter):
         self._finalizer = weakref.finalize(self, _discard, nc, self._tmp)
 
     def flush(self) -> None:
-        """Push what was appended to disk (before a checkpoint)."""
-        self._nc.sync()
+        """Push what was appended to disk (before a checkpoint); nothing once closed."""
+        if self._nc.isopen():
+            self._nc.sync()
 
     def suspend(self) -> None:
         """Close the part file and keep it for a later resume (resumable writers only)."""
@@ -388,9 +390,13 @@ class ArchiveWriter(_StepWriter):
 
     def close(self, attrs: dict | None = None) -> pathlib.Path:
         """Finish: final attributes, read back and check, ``complete = "true"``, fsync,
-        rename onto the target. Nothing is published when the check finds a problem."""
+        rename onto the target. Nothing is published when the check finds a problem, nor
+        when a signal came (:func:`~contactpipe.interrupts.raise_if_signalled`, checked
+        first and again just before the rename): a resumable writer then keeps its
+        part file, whole, for a resume to publish."""
         if self._done:
             raise ArchiveError(f"{self.path}: writer already closed or aborted")
+        raise_if_signalled()
         try:
             final = self._final_attrs(attrs)
             final["complete"] = "true"
@@ -402,8 +408,13 @@ class ArchiveWriter(_StepWriter):
             if problems:
                 raise ArchiveError(f"{self.path}: not published, the archive written breaks "
                                    "the archive's rules: " + join_problems(problems))
-            publish(self._tmp, self.path)
+            # a signal received so far stops the publication (checked last thing before
+            # the rename, with the signals held back until it is done)
+            publish(self._tmp, self.path, check=raise_if_signalled)
         except BaseException as e:
+            if self.resumable and isinstance(e, KeyboardInterrupt):
+                self.suspend()
+                raise
             self.abort()
             if isinstance(e, Exception) and not isinstance(e, ArchiveError):
                 raise ArchiveError(f"{self.path}: closing failed, nothing written "

@@ -23,6 +23,7 @@ only wires them together.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import pathlib
 import signal
@@ -34,7 +35,8 @@ from ..exceptions import (ArchiveError, ContactpipeError, OutputPathError, Scene
                           one_line)
 from ..files import LockedError, check_output_path
 from ..scene import Scene
-from ..simulation import signals_as_interrupt, simulate
+from ..interrupts import deferred, pending, raise_if_signalled
+from ..simulation import ResumeNotice, signals_as_interrupt, simulate
 
 __all__ = ["main", "build_parser"]
 
@@ -67,7 +69,7 @@ def _add_run(sub):
                    help="resumable run: an interrupted run (Ctrl-C, SIGTERM, killed) keeps "
                         "its part file and checkpoint beside OUT, and the same command "
                         "continues it; a second resumable run of OUT meanwhile exits with 3")
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, deferred=True)
 
 
 def _run(args) -> int:
@@ -92,6 +94,7 @@ def _run(args) -> int:
     print(f"wrote {output} ({ds.sizes['time']} instants, {ds.attrs['models']}, "
           f"{float(ds.attrs['wall_time_s']):.2f} s)")
     if figure is not None:
+        raise_if_signalled()             # a signal came after the archive: no figure
         from .plot import plot_profiles, save_figure  # matplotlib: only when a figure is asked
         figure.parent.mkdir(parents=True, exist_ok=True)
         save_figure(plot_profiles(ds), figure)
@@ -120,7 +123,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):
-    print(f"contactpipe: warning: {one_line(message, with_type=False)}",
+    kind = "" if issubclass(category, ResumeNotice) else "warning: "
+    print(f"contactpipe: {kind}{one_line(message, with_type=False)}",
           file=file or sys.stderr)
 
 
@@ -135,13 +139,25 @@ def main(argv=None) -> int:
     if getattr(args, "func", None) is None:
         parser.print_help(sys.stderr)
         return 2
+    # `run` acts on a signal at its safe points (between instants, before a rename): a
+    # signal either stops it before its archive is renamed into place (128 + the number),
+    # or came after the rename, when the run is complete (0, and one line says so)
+    defer = deferred if getattr(args, "deferred", False) else contextlib.nullcontext
     try:
-        with signals_as_interrupt(), warnings.catch_warnings():
+        with signals_as_interrupt(), warnings.catch_warnings(), defer():
             warnings.showwarning = _show_warning
-            return int(args.func(args) or 0)
-    except KeyboardInterrupt as err:     # Ctrl-C, and SIGTERM / SIGHUP (Interrupted)
+            code = int(args.func(args) or 0)
+            late = pending()
+            if late is not None and code == 0:
+                print(f"contactpipe: {signal.Signals(late).name} came after the output was "
+                      f"published: the run is complete", file=sys.stderr)
+            return code
+    except KeyboardInterrupt as err:     # Ctrl-C, SIGTERM, SIGHUP (Interrupted)
         signum = getattr(err, "signum", signal.SIGINT)
-        print(f"contactpipe: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+        where = getattr(err, "resume_from", None)
+        resume = f"; --resume continues from {where}" if where else ""
+        print(f"contactpipe: interrupted ({signal.Signals(signum).name}){resume}",
+              file=sys.stderr)
         return 128 + signum
     except Exception as err:             # noqa: BLE001 - mapped to one line and a status
         if args.debug:

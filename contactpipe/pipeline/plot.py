@@ -52,6 +52,7 @@ import xarray as xr
 
 from .. import analytic
 from ..exceptions import ArchiveError, ContactpipeError
+from ..interrupts import raise_if_signalled
 from ..files import atomic_path, check_output_dir, check_output_path
 from ..materials import composite_modulus
 from ..nomenclature import VARIABLES
@@ -117,6 +118,7 @@ def save_figure(fig, path) -> pathlib.Path:
         warnings.filterwarnings("ignore", message=".*[Tt]ight.?layout", category=UserWarning)
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format="png", dpi=DPI)
+            raise_if_signalled()     # a signal that waited (a deferred one): not published
     return path
 
 
