@@ -26,8 +26,8 @@ fully reversed fatigue limits)
     Smith-Watson-Topper on the critical plane: ``max_n sigma_n,max(n) * eps_a(n)`` [Pa]
     over plane normals n, with the normal strain eps_n = ((1 + nu) sigma_n - nu tr
     sigma)/E of the elastic stress; planes where sigma_n,max <= 0 count 0. Normals on a
-    ``plane_step`` degree grid of the hemisphere (default 10), then refined twice around
-    the best one (steps / 4, / 16). Also the normal of the critical plane.
+    ``plane_step`` degree grid of the hemisphere (default 10, at least 1: finer grids do
+    not fit in memory), then refined twice around the best one (steps / 4, / 16). Also the normal of the critical plane.
 
 Shear amplitude sqrt(J2,a) and the centre s* (Crossland, Dang Van, amplitude): by default
 the **minimum circumscribed ball** (MCB) of the deviatoric path, in the 5-D space where the
@@ -67,6 +67,14 @@ COMPONENTS = ("s11", "s22", "s33", "s12", "s13", "s23")
 SQRT3 = math.sqrt(3.0)
 #: Bound of the working memory per block of points [bytes].
 BLOCK_BYTES = 64 * 2 ** 20
+#: The finest ``plane_step`` of the SWT criterion [deg]: about 20 600 planes, an array
+#: of 165 MB per 1000 instants for a single point (a step of 1e-4 would be ~4e12 planes).
+MIN_PLANE_STEP = 1.0
+
+
+def _planes(step) -> int:
+    """About how many planes :func:`plane_normals` makes for ``step`` degrees."""
+    return int(round(4 * math.pi / 2 / math.radians(step) ** 2, -2))
 
 
 # --------------------------------------------------------------------------- geometry
@@ -503,8 +511,12 @@ def _constants(criterion, given, stress_ds):
                 raise ValueError("criterion 'swt': the dataset has no 'poisson' attribute; "
                                  "pass poisson=")
             c["poisson"] = float(nu)
-        if not float(c["plane_step"]) > 0:
-            raise ValueError(f"plane_step = {c['plane_step']!r} degrees: must be > 0")
+        if not MIN_PLANE_STEP <= float(c["plane_step"]) <= 90:
+            raise ValueError(f"plane_step = {c['plane_step']!r} degrees: allowed "
+                             f"{MIN_PLANE_STEP:g} to 90 (the smallest, {MIN_PLANE_STEP:g}, "
+                             f"already holds about {_planes(MIN_PLANE_STEP)} planes, refined "
+                             f"twice to 1/16 of the step; a finer grid does not fit in "
+                             f"memory)")
         c["plane_step"] = float(c["plane_step"])
     return c
 

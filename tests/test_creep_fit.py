@@ -265,3 +265,16 @@ def test_fit_scene_refusals(table, kind, extra, match, tmp_path):
         hs["table_kind"] = kind
     with pytest.raises(cp.SceneError, match=match):
         fit_scene(hs)
+
+
+def test_fit_scene_refuses_a_fifo_at_once(tmp_path):
+    """creep = "fit" with ``file`` a FIFO: refused at once with a SceneError naming the key
+    (opening it to read blocked for ever), as the geometry and friction files are."""
+    import os
+    fifo = tmp_path / "data.csv"
+    os.mkfifo(fifo)
+    hs = {"material": "viscoelastic", "poisson": NU, "creep": "fit", "file": str(fifo),
+          "table_kind": "creep"}
+    with pytest.raises(cp.SceneError, match=r"halfspace\.file = .*not a regular file \(a "
+                                            r"FIFO, a device or a folder\)"):
+        fit_scene(hs)

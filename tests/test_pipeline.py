@@ -300,6 +300,10 @@ def test_stress_product_computed_once_then_when_its_inputs_change(tmp_path, monk
       "stress.cycle and stress.cycle_norm cannot both be given"]),
     ("depths = [0.0]\ncycle_norm = [0.2, 1.0]\n",
      ["stress.cycle_norm = [0.2, 1.0] is not used without a criterion"]),
+    # a plane grid of 1e-4 degrees (~4e12 planes) exhausted the memory (SIGKILL)
+    ("depths = [0.0]\ntime = \"all\"\ncriterion = \"swt\"\nyoung = 2e11\n"
+     "plane_step = 1e-4\n",
+     ["stress.plane_step", "0.0001", "an angle in [1, 90] [deg]"]),
 ])
 def test_bad_stress_table_exit_2(tmp_path, capsys, table, parts):
     path = make_study(tmp_path, forces=(1000.0,), figures=[], reference="none",

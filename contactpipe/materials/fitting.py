@@ -6,6 +6,7 @@ Units: moduli [Pa], compliances [1/Pa], times [s], frequencies [Hz].
 from __future__ import annotations
 
 import os
+import stat
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -376,6 +377,9 @@ def read_table_file(path, kind: str) -> np.ndarray:
 
 def _read_text(path) -> str:
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):     # a FIFO would block for ever
+            raise ValueError(f"cannot read {path}: not a regular file (a FIFO, a device or "
+                             f"a folder); give a table file")
         with open(path, encoding="utf-8") as f:
             return f.read()
     except (OSError, UnicodeDecodeError) as e:

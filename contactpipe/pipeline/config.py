@@ -137,8 +137,9 @@ CONSTANT_FIELDS = (
           ok=lambda x: x > 0, unit="Pa"),
     Field("young", "number", _PA + ", Young's modulus", ok=lambda x: x > 0, unit="Pa"),
     Field("poisson", "number", "a number in [0, 0.5]", ok=lambda x: 0 <= x <= 0.5, unit="1"),
-    Field("plane_step", "number", "an angle in (0, 90] [deg]", ok=lambda x: 0 < x <= 90,
-          unit="deg"),
+    Field("plane_step", "number", "an angle in [1, 90] [deg] (the smallest, 1, already "
+          "makes about 20 600 planes; finer grids do not fit in memory)",
+          ok=lambda x: 1 <= x <= 90, unit="deg"),
     Field("shear_amplitude", "choice", options=("mcb", "longest_chord")),
     Field("tolerance", "number", "a number in (0, 0.01]", ok=lambda x: 0 < x <= 0.01,
           unit="1"),
