@@ -792,11 +792,14 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         outputs (a dict of arrays and numbers, as written to the archive).
     resume : bool
         With ``path``: the run is resumable. Its part file (``.NAME.resumable.part``)
-        and a checkpoint (``.NAME.ckpt.npz``, every ``checkpoint_seconds``) stay beside the
-        target when the run is interrupted (Ctrl-C, SIGTERM, SIGHUP, a killed process);
-        calling again with ``resume=True`` continues from the last checkpoint of the same
-        scene. Without a checkpoint, or with a damaged one, it starts from the beginning
-        (a :class:`ResumeWarning` says so). While it runs it holds ``.NAME.resume.lock``.
+        and a checkpoint (``.NAME.ckpt.npz``, every ``checkpoint_seconds`` and, on Ctrl-C,
+        SIGTERM or SIGHUP, of the instant reached) stay beside the target when the run is
+        interrupted or killed; the :class:`Interrupted` raised says in ``resume_from``
+        where a resume continues. Calling again with ``resume=True`` continues from the
+        last checkpoint of the same scene and says so (:class:`ResumeNotice`). Without
+        a checkpoint it starts from the beginning (a :class:`ResumeNotice` says so when
+        a part file was there), with a damaged one too (a :class:`ResumeWarning`). While
+        it runs it holds ``.NAME.resume.lock``.
     checkpoint_seconds : float
         Wall time between checkpoints of a resumable run [s].
 
@@ -823,9 +826,10 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
 
     Notes
     -----
-    SIGTERM and SIGHUP are handled like Ctrl-C (:class:`Interrupted`, a
-    ``KeyboardInterrupt``) while the run holds the main thread and no handler of the
-    application is installed for them.
+    Ctrl-C, SIGTERM and SIGHUP raise :class:`Interrupted` (a ``KeyboardInterrupt``)
+    while the run holds the main thread and no handler of the application is installed
+    for them: at the end of the instant in progress (a second signal: at once), or just
+    before the archive's rename, when nothing is published.
     """
     wall0 = _time.perf_counter()
     if path is not None:
