@@ -188,3 +188,83 @@ def test_readme_figures_quick_run(tmp_path, capsys):
     assert table.count("\n| ") == 12 and "fig3_maxwell.py" in table     # header + 11 rows
     with pytest.raises(SystemExit):                   # a quick run never touches the README
         rf.main(["--quick", "--update-readme", "--out", str(out)])
+
+
+# --------------------------------------------------------------------------- decision record
+RECORD = ROOT / "docs" / "design-choices.md"
+RESULTS = ROOT / "benchmarks" / "results"
+RESULT_COLUMNS = ["decision", "case", "grid", "steps", "tolerance", "quantity", "baseline",
+                  "value", "value_high", "unit", "status", "note", "measured_on"]
+FIELDS = ("Decision", "Why", "Measured", "Rejected")
+ENTRY = re.compile(r"^### (D\d+)\. \S")
+
+
+def _record_entries():
+    """{number: [the entry's lines after its heading]} of the decision record."""
+    entries, current = {}, None
+    for line in RECORD.read_text(encoding="utf-8").splitlines():
+        if line.startswith("#"):
+            match = ENTRY.match(line)
+            current = match.group(1) if match else None
+            if current is not None:
+                assert current not in entries, f"{current} appears twice in {RECORD.name}"
+                entries[current] = []
+        elif current is not None and line.strip():
+            entries[current].append(line)
+    return entries
+
+
+def test_decision_record_is_short_with_four_fields_per_entry():
+    """docs/design-choices.md is at most 250 lines, and each entry ("### Dn. title") is
+    exactly four one-line fields: Decision, Why, Measured, Rejected."""
+    n_lines = len(RECORD.read_text(encoding="utf-8").splitlines())
+    assert n_lines <= 250, f"{RECORD.name} has {n_lines} lines (at most 250)"
+    entries = _record_entries()
+    assert len(entries) >= 20, sorted(entries)
+    bad = {number: lines for number, lines in entries.items()
+           if [ln.split(":", 1)[0] for ln in lines] != [f"- {f}" for f in FIELDS]
+           or any(len(ln.split(":", 1)[1].strip()) < 2 for ln in lines)}
+    assert not bad, f"entries without exactly the fields {FIELDS}, one line each: {bad}"
+
+
+def _csv(path):
+    import csv
+    with path.open(newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        return reader.fieldnames, list(reader)
+
+
+def test_decision_record_figures_are_in_the_results_files():
+    """Every CSV the record cites ("file.csv (D7)", or "(D1, D13)" for another entry's rows)
+    is a file under benchmarks/results/ that parses with the record's columns (numbers where
+    numbers belong, status kept or rejected) and holds rows of the entries named; an entry's
+    Measured field cites rows of its own, or says with a dash that it has no figure."""
+    cited = set()
+    for number, lines in _record_entries().items():
+        text, measured = " ".join(lines), lines[2]
+        refs = re.findall(r"((?:[a-z_]+\.csv(?:, )?)+) \(([^)]*)\)", text)
+        names = set(re.findall(r"([a-z_]+\.csv)", text))
+        assert names == {n for files, _ in refs for n in re.findall(r"[a-z_]+\.csv", files)}, (
+            f"{number}: a CSV cited without the entries whose rows it means")
+        assert names or measured.startswith("- Measured: —"), (number, measured)
+        own = False
+        for files, decisions in refs:
+            wanted = set(re.findall(r"D\d+", decisions)) or {number}
+            for name in re.findall(r"[a-z_]+\.csv", files):
+                path = RESULTS / name
+                assert path.is_file(), f"{number} cites {name}, not in benchmarks/results/"
+                header, rows = _csv(path)
+                assert header == RESULT_COLUMNS, (name, header)
+                assert any(r["decision"] in wanted for r in rows), (number, name, wanted)
+                own |= any(r["decision"] == number for r in rows) and f"results/{name}" in measured
+                cited.add(name)
+        assert own or not names, f"{number}: Measured cites no benchmarks/results/ rows of its own"
+    assert cited, f"{RECORD.name} cites no results file"
+    for name in cited:
+        _, rows = _csv(RESULTS / name)
+        for r in rows:
+            assert r["status"] in ("kept", "rejected"), (name, r)
+            assert math.isfinite(float(r["value"])), (name, r)
+            for key in ("baseline", "value_high", "tolerance"):
+                assert r[key] == "" or math.isfinite(float(r[key])), (name, key, r)
+            assert re.fullmatch(r"\d{4}-\d\d-\d\d [0-9a-f]{7}", r["measured_on"]), (name, r)
