@@ -268,3 +268,41 @@ def test_decision_record_figures_are_in_the_results_files():
             for key in ("baseline", "value_high", "tolerance"):
                 assert r[key] == "" or math.isfinite(float(r[key])), (name, key, r)
             assert re.fullmatch(r"\d{4}-\d\d-\d\d [0-9a-f]{7}", r["measured_on"]), (name, r)
+
+
+# Where a document names a module or a test by its short path.
+_SHORT = {"solver/": "contactpipe/", "pipeline/": "contactpipe/", "archive/": "contactpipe/",
+          "materials/": "contactpipe/", "analytic/": "contactpipe/", "test_": "tests/"}
+# Written by a command the document names, and absent until it is run (the README says so
+# where it is absent: test_readme_speed_table_comes_from_the_results_file).
+_OUTPUTS = {"benchmarks/results/readme.csv"}
+_PATH = re.compile(r"(?<![\w./-])((?:\.\./)*[a-z0-9_][a-z0-9_./-]*\.(?:md|py|csv|toml|txt))\b")
+
+
+def test_documents_cite_only_files_in_the_repository():
+    """README.md, docs/*.md and studies/README.md cite no file that is not in the
+    repository: every path they give (in code spans and links) exists, none reaches
+    outside the repository (../), and every link's target exists."""
+    documents = [ROOT / "README.md", ROOT / "studies" / "README.md",
+                 *sorted((ROOT / "docs").glob("*.md"))]
+    missing = []
+    for doc in documents:
+        text = doc.read_text(encoding="utf-8")
+        spans = re.findall(r"`([^`\n]+)`", text) + re.findall(r"\]\(([^)\s#]+)\)", text)
+        for span in spans:
+            for path in _PATH.findall(span):
+                if path.startswith("../") or path.startswith("/"):
+                    missing.append(f"{doc.relative_to(ROOT)}: {path} (outside the repository)")
+                    continue
+                if "/" not in path and not path.startswith("test_"):
+                    continue                                  # a bare file name in prose
+                full = next((p + path for s, p in _SHORT.items() if path.startswith(s)), path)
+                if not (ROOT / full).exists() and full not in _OUTPUTS:
+                    missing.append(f"{doc.relative_to(ROOT)}: {path}")
+        for target in re.findall(r"\[[^\]\n]*\]\(([^)\s#]+)\)", text):
+            if "://" in target or not re.search(r"[./]", target):
+                continue                                      # a web address, or math: L[f](s)
+            if not (doc.parent / target).exists():
+                if (doc.parent / target).resolve().relative_to(ROOT).as_posix() not in _OUTPUTS:
+                    missing.append(f"{doc.relative_to(ROOT)}: link to {target}")
+    assert not missing, "documents cite files not in the repository:\n" + "\n".join(missing)
