@@ -203,11 +203,48 @@ def test_start_follows_the_jump():
     ("kelvin_voigt", 0.05, "bdf2"), ("prony3", 0.1, "linear"), ("prony3", 0.2, "bdf2")])
 def test_auto_rule(name, dt, rule):
     """"auto" takes "linear" exactly where its error keeps its sign (Maxwell: dt < 2 t';
-    Zener 100: dt below about 0.02 tau), "bdf2" elsewhere and for a tabulated creep."""
+    Zener 100: dt below about 0.02 tau), "bdf2" elsewhere and for a table without
+    instantaneous elasticity (phi(0) = 0), "linear" for a table with it."""
     assert resolve_rule(CREEPS[name], dt, "auto") == rule
     assert make_memory(CREEPS[name], dt, "auto", (2,)).rule == rule
-    table = TabulatedCreep(t=(0.0, 1.0), phi=(1.0, 2.0))
-    assert make_memory(table, dt, "auto", (2,)).rule == "bdf2"
+    assert make_memory(TabulatedCreep(t=(0.0, 1.0), phi=(0.0, 2.0)), dt, "auto",
+                       (2,)).rule == "bdf2"
+    assert make_memory(TabulatedCreep(t=(0.0, 100.0), phi=(1.0, 2.0)), dt, "auto",
+                       (2,)).rule == "linear"
+
+
+@pytest.mark.parametrize("name,dt", [("maxwell", 0.1), ("maxwell", 2.5), ("zener2", 0.1),
+                                     ("zener100", 0.1), ("zener100", 0.01),
+                                     ("kelvin_voigt", 0.05), ("burgers", 0.1)])
+def test_auto_rule_of_a_table_sampled_from_a_law(name, dt):
+    """A table sampled from a law (5 knots a step over 120 steps) gets the rule "auto"
+    gives the law itself: its error followed step by step (linear_error_keeps_sign)
+    zigzags exactly where the law's amplification factors say it alternates."""
+    tt = np.linspace(0.0, 120 * dt, 601)
+    table = TabulatedCreep(t=tuple(tt), phi=tuple(CREEPS[name](tt)))
+    assert resolve_rule(table, dt, "auto") == resolve_rule(CREEPS[name], dt, "auto")
+
+
+@pytest.mark.parametrize("rule,ratio", [("auto", 1.5), ("linear", 1.5),
+                                        ("bdf2", 1.4208)])
+def test_auto_rule_of_a_table_on_a_flat_punch(rule, ratio):
+    """A rigid flat punch (a = 0.5 mm) on a tabulated half-space, W stepped: the contact
+    stays the punch's face, so omega3(t)/omega3(0) = phi(t) exactly (1.5 at 1 s for
+    phi = 1, 1.2, 1.5 at 0, 0.5, 1 s). 32^2, 5 steps: "auto" takes "linear", exact to
+    1e-9 (measured 2e-14); plain BDF2 is 5.3 % off (1.4208), as before the fix."""
+    a = 0.5e-3
+    sc = cp.Scene(name="punch", geometry={"shape": "flat_punch", "radius": a},
+                  indenter={"material": "rigid"},
+                  halfspace={"material": "viscoelastic", "young": E, "poisson": NU,
+                             "creep": "tabulated", "table": [[0, 1], [0.5, 1.2], [1, 1.5]]},
+                  load={"time": [0.0, 1.0], "normal_force": W},
+                  grid={"points": [32, 32], "size": [2.5 * a] * 2}, time={"steps": 5},
+                  solver={"time_rule": rule, "tolerance": 1e-10})
+    ds = cp.simulate(sc)
+    got = float(ds.omega3[-1] / ds.omega3[0])
+    assert got == pytest.approx(ratio, rel=1e-9 if ratio == 1.5 else 1e-4)
+    if rule == "auto":
+        assert ds.attrs["time_rule_resolved"] == "halfspace: linear"
 
 
 # --------------------------------------------------------------------------- order
@@ -401,7 +438,7 @@ def test_lee_radok_fields(law, rule, bound):
 
 def test_tabulated_kelvin_voigt_like_creep_has_no_holes():
     """A tabulated phi starting at 0 (no instantaneous elasticity) takes the direct sum with
-    BDF2 weights ("auto" resolves to "bdf2" for a table): 48^2 over 1.6 mm, 20 steps: no
+    BDF2 weights ("auto" resolves to "bdf2" for it): 48^2 over 1.6 mm, 20 steps: no
     hole, radius within 1 cell of the Kelvin-Voigt it samples (table every 0.05 s)."""
     ts = np.linspace(0.0, 3.0, 61)
     table = [[float(t), float(-np.expm1(-t))] for t in ts]
