@@ -178,6 +178,7 @@ def _check_scene(p: dict, problems: list):
     """Checks across parts; returns the TimeMesh with ``steps`` resolved."""
     with np.errstate(all="ignore"):  # extreme but valid constants must not warn
         _check_bodies(p, problems)
+        _check_rigid_start(p, problems)
         _check_sliding(p, problems)
         _check_tables(p, problems)
         time = _resolve_time(p, problems)
@@ -205,6 +206,31 @@ def _check_bodies(p, problems):
                     f"solver.time_rule = 'step_start' with {side}.creep = {spec.creep!r}"
                     f" (phi(0) = 0, no instantaneous elasticity): the step-start rule "
                     f"gives a rigid response. Use time_rule = \"auto\"")
+
+
+def _check_rigid_start(p, problems):
+    """Without instantaneous elasticity on either body (rigid, or phi(0) = 0), nothing
+    deforms at t0: an approach or a tilt imposed there would need an infinite force."""
+    load = p["load"]
+    bodies = [(side, p[side]) for side in ("indenter", "halfspace")]
+    if load is None or any(spec is None for _, spec in bodies):
+        return
+    soft = [(side, spec) for side, spec in bodies if spec.material != "rigid"]
+    if any(spec.material == "elastic" or spec.creep_function().phi0 != 0
+           for _, spec in soft):
+        return
+    prog = load.programs()
+    why = ", ".join(f"{side}.creep = {spec.creep!r} (phi(0) = 0)" for side, spec in soft)
+    why += "".join(f", a rigid {side}" for side, spec in bodies if spec.material == "rigid")
+    for i, key, unit in ((0, "normal_approach", "m"), (3, "rotation1", "rad"),
+                         (4, "rotation2", "rad")):
+        value = prog.motion[i, 0]
+        if np.isfinite(value) and value != 0 and (i > 0 or value > 0):
+            problems.append(
+                f"load.{key} = {value:g} {unit} at t = {prog.t[0]:g} s with {why}: no body "
+                f"has instantaneous elasticity, so a step there needs an infinite force; "
+                f"ramp it from 0 (one value per load.time knot, the first 0)")
+            return
 
 
 def _check_step_start_stability(p, time, problems):

@@ -482,9 +482,10 @@ def _take_motions(pb, st, k, f, res):
 def _advance(pb, st, op, sub, U, res):
     """Take a solved (sub-)instant into the state: slip, dissipation, rigid motion."""
     contact = res.p > 0
-    if sub.tangential == "none" and pb.tang and pb.plan.coupling != "none":
+    if sub.tangential == "none" and pb.tang and pb.plan.coupling != "none" and not op.rigid:
         # frictionless preload on a coupled pair: the pressure still moves the surfaces
-        # in-plane (K13, K23); record it, or the next step would take it for slip
+        # in-plane (K13, K23); record it, or the next step would take it for slip (an
+        # instant without compliance, phi(0) = 0 on every body, moves nothing)
         res.u[:2] = U[:2] + op.coupling_to_tangential(res.p)
     if pb.tang:
         du = res.u[:2] - st.u[:2]

@@ -209,8 +209,10 @@ class _Instant:
     def normal(self, q, p_start, tol, Ap0=None):
         """UNC: the pressure under the gap opened or closed by the shear q."""
         op = self.op
+        # an instant without compliance (no body with instantaneous elasticity) moves
+        # nothing: the shear opens no gap
         u3q = (op.coupling_to_normal(q[0], q[1] if self.vector else None)
-               if self.coupled and np.any(q) else 0.0)
+               if self.coupled and not op.rigid and np.any(q) else 0.0)
         return solve_normal(op, self.gap + self.U[2] + u3q, self.W, self.cell, p_start, tol,
                             self.lim.max_iter, Ap0=Ap0, control=self.normal_ctl)
 

@@ -177,9 +177,7 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
     if op.rigid or (control is None and W <= 0.0):
         if control is None:
             return _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0)
-        # no compliance for this increment: only a force-controlled W has a meaning there
-        return NormalResult(np.zeros_like(gap0), np.nan, np.zeros_like(gap0), 0, np.inf,
-                            False)
+        return _rigid_motion(gap0, control)
     fast = {"precondition": op.normal_preconditioner() if precondition else None}
     coarse_its = 0
     if multilevel and not np.any(p0):
@@ -213,6 +211,33 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
         reached[i] = res.multiplier[j] / (1.0 if i == 0 else L)
     return NormalResult(res.x, float(reached[0]), res.Ax, res.iterations + coarse_its,
                         res.residual, res.converged, phi=reached[1:].copy())
+
+
+def _rigid_motion(gap0, control):
+    """An instant without compliance (phi(0) = 0 on every body) under motion control.
+
+    Nothing can deform, so the imposed motions must leave every gap open or just closed
+    (a ramp of the approach from 0: the flat face touching) and the controlled forces
+    and moments be 0: then p = 0 is the answer, the force-controlled approach the one
+    that just touches, the free rotations 0. A motion that closes a gap would need an
+    infinite force (the scene refuses a step in the approach at t0) and a nonzero
+    controlled force other than W alone has no solution: not converged, residual inf.
+    """
+    X1, X2, L = control.arms()
+    force, motion = np.asarray(control.force, float), np.asarray(control.motion, float)
+    b = np.array(gap0, dtype=float)
+    for i, f in enumerate((np.ones_like(gap0), X2, X1)):
+        if np.isnan(force[i]) and motion[i] != 0.0:
+            b = b - motion[i] * f
+    scale = max(float(np.abs(gap0).max()), float(np.nanmax(np.abs(motion[:1]))), 1e-300)
+    zero = np.zeros_like(gap0)
+    if np.any(np.nan_to_num(force) != 0.0) or b.min() < -1e-12 * scale:
+        return NormalResult(zero, np.nan, zero, 0, np.inf, False)
+    reached = np.where(np.isnan(force), motion, 0.0)
+    if not np.isnan(force[0]):
+        reached[0] = float(gap0.min())                   # the approach that just touches
+    return NormalResult(zero, float(reached[0]), zero, 0, 0.0, True,
+                        phi=reached[1:].copy())
 
 
 def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0, precondition=None):
