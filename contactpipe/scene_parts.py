@@ -26,6 +26,7 @@ from . import friction_map, materials
 from .exceptions import SceneError
 from .loading import (MAX_STEPS, ROWS, Programs, knot_steps, per_knot, program_field,
                       read_program)
+from .scene_fit import fit_options, fitted_young
 from .tables import Field, Part, Reader, is_sequence, show
 
 __all__ = ["Part", "Geometry", "BodySpec", "Friction", "Fretting", "Load", "Grid",
@@ -62,10 +63,12 @@ CREEP_KEYS = {
     "zener": (("relaxed_young", "retardation_time"), ()),
     "prony": (("terms",), ("relaxation_time",)),
     "tabulated": (("table",), ()),
-    "fit": (("file", "table_kind"), ()),
+    "fit": (("file", "table_kind"), ("terms_per_decade", "time_constants", "free_times",
+                                     "fit_tolerance")),
 }
+FIT_KEYS = CREEP_KEYS["fit"][1]
 MODEL_KEYS = ("relaxation_time", "retardation_time", "relaxed_young", "terms", "table",
-              "file", "table_kind")
+              "file", "table_kind") + FIT_KEYS
 
 
 def _positive(x) -> bool:
@@ -211,6 +214,10 @@ class BodySpec(Part):
     table_kind : {"creep", "relaxation", "dynamic"}
         ``creep = "fit"``: what the file holds (:data:`contactpipe.materials.TABLE_KINDS`);
         tensile data, or shear data with ``bulk = "elastic"``.
+    terms_per_decade, time_constants, free_times, fit_tolerance : optional
+        ``creep = "fit"``: the fit's log-spaced start (2 per decade) or its time
+        constants [s], whether they move from there (true), and the largest error of
+        the fitted compliance accepted (:data:`contactpipe.materials.FIT_TOLERANCE`).
     """
 
     material: str
@@ -225,6 +232,10 @@ class BodySpec(Part):
     bulk: str | None = None
     file: str | None = None
     table_kind: str | None = None
+    terms_per_decade: int | None = None
+    time_constants: tuple | None = None
+    free_times: bool | None = None
+    fit_tolerance: float | None = None
 
     PATH = "body"
     FIELDS = (
@@ -246,6 +257,12 @@ class BodySpec(Part):
         Field("file", "path", "the path of a text or CSV table (relative to the scene "
                               "file)"),
         Field("table_kind", "choice", options=tuple(materials.TABLE_KINDS)),
+        Field("terms_per_decade", "integer", "an integer from 1 to 100",
+              ok=lambda n: 1 <= n <= 100),
+        Field("time_constants", "numbers", "a list of finite numbers > 0 [s]",
+              ok=_positive, unit="s"),
+        Field("free_times", "bool"),
+        Field("fit_tolerance", "number", "a finite number > 0 [1]", ok=_positive, unit="1"),
     )
 
     @classmethod
@@ -288,7 +305,7 @@ class BodySpec(Part):
                   f"(the relaxed modulus E_inf < the instantaneous E0), got {relaxed:g}")
         if creep == "fit" and r.ok:
             v["file"] = os.path.abspath(os.path.expanduser(v["file"]))
-            v["young"] = _fitted_young(r, v)
+            v["young"] = fitted_young(r, v)
         return cls.make(material="viscoelastic", creep=creep, **v) if r.ok else None
 
     def fit(self):
@@ -296,7 +313,8 @@ class BodySpec(Part):
         other models); cached while the file is unchanged."""
         if self.creep != "fit":
             return None
-        return materials.fit_table_file(self.file, self.table_kind)
+        return materials.fit_table_file(self.file, self.table_kind,
+                                        **fit_options(vars(self)))
 
     def creep_function(self):
         """The normalised creep function phi(t) (:data:`materials.ELASTIC` if none)."""
@@ -321,28 +339,6 @@ class BodySpec(Part):
             return materials.Body(kind="rigid")
         return materials.Body(kind=self.material, young=self.young, poisson=self.poisson,
                               creep=self.creep_function(), bulk=self.bulk or "creep")
-
-
-#: Relative difference of ``young`` from a fit's modulus that is refused (a stored scene
-#: writes the fitted value back exactly; anything else is a contradiction).
-FIT_YOUNG_RTOL = 1e-9
-
-
-def _fitted_young(r: Reader, v: dict):
-    """The Young modulus of ``creep = "fit"`` [Pa]: from the fit (shear data with
-    ``bulk = "elastic"``: 2 (1 + nu) G); a given ``young`` must agree. None (with the
-    problem recorded, naming the file key) when the table is refused."""
-    try:
-        fit = materials.fit_table_file(v["file"], v["table_kind"])
-    except ValueError as e:
-        r.add(f"{r.key('file')} = {show(v['file'])} ({v['table_kind']} table): {e}")
-        return None
-    young = fit.young * (2.0 * (1.0 + v["poisson"]) if v.get("bulk") == "elastic" else 1.0)
-    given = v.get("young")
-    if given is not None and not math.isclose(given, young, rel_tol=FIT_YOUNG_RTOL):
-        r.add(f"{r.key('young')} = {given:g} Pa contradicts the modulus of the fitted "
-              f"table {young:.10g} Pa; leave young out (it is taken from the table)")
-    return young
 
 
 # ----------------------------------------------------------------------------- friction

@@ -38,7 +38,7 @@ from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSliding
                          OutputPathError, SceneError, one_line)
 from .files import LockedError, check_output_path, exclusive_lock
 from .interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
-from .materials import dundurs_beta
+from .materials import FIT_TOLERANCE, dundurs_beta
 from .nomenclature import variables_for
 from .planning import check_resources, estimate_resources, plan as make_plan
 from .solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
@@ -382,11 +382,14 @@ class _Problem:
             if b.split:
                 out[f"{side}_poisson_model"] = ("elastic bulk: the Poisson ratio varies "
                                                 "from its value where phi = 1")
-            fit = getattr(self.scene, side).fit()
+            spec = getattr(self.scene, side)
+            fit = spec.fit()
             if fit is not None:
                 out[f"{side}_fit_rms_error"] = fit.rms_error
                 out[f"{side}_fit_max_error"] = fit.max_error
                 out[f"{side}_fit_terms"] = len(fit.creep.tau)
+                out[f"{side}_fit_compliance_error"] = fit.compliance_error
+                out[f"{side}_fit_tolerance"] = spec.fit_tolerance or FIT_TOLERANCE
         return out
 
     def written(self, k) -> int:

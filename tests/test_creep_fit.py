@@ -17,8 +17,9 @@ T = np.concatenate([[0.0], np.logspace(-2, 2, 60)])         # 0 and 10 ms .. 100
 
 def test_creep_table_of_a_prony_series():
     """A compliance table sampled from a 3-term Prony series whose retardation times lie on
-    the fit's grid (2 per decade over 0.01-100 s): phi and E0 back to 1e-6 (measured
-    3e-8), the reported error is the misfit (5e-9 rms), the fit's phi is stable under "bdf2"."""
+    the fit's grid (2 per decade over 1 ms-100 s): phi and E0 back to 1e-6 (measured
+    8e-15), the reported error is the misfit (6e-15 rms), the fit's phi is stable under
+    "bdf2"."""
     true = prony([[0.5, 0.1], [1.0, 1.0], [2.0, 10.0]])
     fit = fit_creep_compliance(T, true(T) / 2e9)
     assert isinstance(fit, PronyFit) and fit.source == "creep"
@@ -47,13 +48,14 @@ def test_creep_table_with_a_dashpot():
 
 def test_power_law_creep_fit_error():
     """A broad spectrum the series does not contain (D = D0 (1 + t^0.3), 4 decades): the fit
-    error is reported: 0.47 % rms, 2.3 % at most (2 terms per decade), at 0.59 % / 2.5 %
-    with 1; phi positive and non-decreasing."""
+    error is reported: 0.015 % rms, 0.070 % at most (2 terms per decade, free), 0.067 % /
+    0.12 % with 1 (2.3 % at most before the grid reached a decade below the first
+    sample: the creep faster than 10 ms had no term); phi positive and non-decreasing."""
     d = 1e-9 * (1.0 + T ** 0.3)
     two = fit_creep_compliance(T, d)
     one = fit_creep_compliance(T, d, terms_per_decade=1)
-    assert two.rms_error < 0.006 and two.max_error < 0.025
-    assert one.rms_error < 0.007 and one.max_error < 0.03
+    assert two.rms_error < 0.0005 and two.max_error < 0.002
+    assert one.rms_error < 0.001 and one.max_error < 0.002
     assert np.all(np.diff(two.creep(np.logspace(-4, 4, 200))) >= 0)
 
 
@@ -151,8 +153,8 @@ def assert_same_run(a, b, rtol):
 def test_fit_scene_reproduces_the_prony_series(tmp_path):
     """A creep-compliance table sampled from a known Prony series (retardation times on the
     fit's grid) gives, through creep = "fit", the simulation of that series: 24^2, 10 steps,
-    p, u3, omega3 and the contact area within 1e-6 (measured 1.1e-8); the fit error is in
-    the archive attributes (measured 4.5e-9 rms, 1.4e-8 max) and young comes from the
+    p, u3, omega3 and the contact area within 1e-6 (measured 1.5e-14); the fit error is in
+    the archive attributes (measured 6e-15 rms, 1.2e-14 max) and young comes from the
     table."""
     e0, terms = 2e9, [[0.5, 0.1], [1.0, 1.0], [2.0, 10.0]]
     true = prony(terms)
@@ -278,3 +280,112 @@ def test_fit_scene_refuses_a_fifo_at_once(tmp_path):
     with pytest.raises(cp.SceneError, match=r"halfspace\.file = .*not a regular file \(a "
                                             r"FIFO, a device or a folder\)"):
         fit_scene(hs)
+
+
+# ------------------------------------------------ time constants off the grid (issue 42)
+OFF = 10 ** 0.25              # half-way (in log) between two grid times of 2 per decade
+E0, EINF = 3e9, 1e9
+
+
+def off_grid_table(kind):
+    """A Zener material (E0 = 3 GPa, E_inf = 1 GPa) whose one time constant lies off
+    the fit's grid: (abscissae, columns, the exact creep function phi)."""
+    if kind == "creep":
+        return T, (zener(E0, EINF, OFF)(T) / E0,), zener(E0, EINF, OFF)
+    if kind == "relaxation":
+        return (T, (EINF + (E0 - EINF) * np.exp(-T / OFF),),
+                zener(E0, EINF, OFF * E0 / EINF))
+    f = np.logspace(-3, 2, 41)
+    tau = OFF / (2 * np.pi)
+    wt = 2 * np.pi * f * tau
+    return (f, (EINF + (E0 - EINF) * wt ** 2 / (1 + wt ** 2), (E0 - EINF) * wt / (1 + wt ** 2)),
+            zener(E0, EINF, tau * E0 / EINF))
+
+
+FITS = {"creep": fit_creep_compliance, "relaxation": fit_relaxation_modulus,
+        "dynamic": fit_dynamic_moduli}
+TT = np.concatenate([[0.0], np.logspace(-3, 2, 300)])
+
+
+@pytest.mark.parametrize("kind", list(FITS))
+def test_off_grid_time_constant_is_found(kind):
+    """One time constant half-way between two grid times (2 per decade): the free time
+    constants (the default) find it, D(t) = phi/E0 within 1e-9 of the exact Zener over
+    1 ms .. 100 s and E0 within 1e-9 (measured 1e-15 for all three kinds), and the
+    recorded compliance error says so (< 1e-9). The grid alone (free=False, the fit
+    before) is off by more than 1 % in D(t) (measured 3.2 %, 2.6 %, 7.3 %, with E0 off
+    by 1.1 %, 1.4 %, -5.7 %); its recorded error tracks that: the creep data's misfit,
+    the compliance interconverted from the relaxation data within 5 % of the true error
+    (measured 2.59 % against 2.60 %), the complex compliance of the dynamic data above
+    1 % (measured 12 %)."""
+    x, cols, true = off_grid_table(kind)
+    exact = true(TT) / E0
+    fit = FITS[kind](x, *cols)
+    assert np.abs(fit.creep(TT) / fit.young / exact - 1).max() < 1e-9
+    assert fit.young == pytest.approx(E0, rel=1e-9)
+    assert fit.compliance_error < 1e-9
+    grid = FITS[kind](x, *cols, free=False)
+    wrong = np.abs(grid.creep(TT) / grid.young / exact - 1)
+    assert wrong.max() > 0.01
+    assert grid.compliance_error > 0.01
+    if kind != "dynamic":
+        at = TT[(TT >= x[0]) & (TT <= x[-1])]
+        truth = np.abs(grid.creep(at) / grid.young / (true(at) / E0) - 1).max()
+        assert grid.compliance_error == pytest.approx(truth, rel=0.05)
+
+
+def test_given_time_constants_are_used():
+    """time_constants fixed (free=False) at the true one: exact; given with the grid's
+    spacing, the free refinement still finds it."""
+    x, (d,), true = off_grid_table("creep")
+    fixed = fit_creep_compliance(x, d, times=[OFF], free=False)
+    assert fixed.times == (pytest.approx(OFF),)
+    np.testing.assert_allclose(fixed.creep(TT), true(TT), rtol=1e-9)
+    moved = fit_creep_compliance(x, d, times=[0.1, 1.0, 10.0])
+    np.testing.assert_allclose(moved.creep(TT), true(TT), rtol=1e-9)
+
+
+def off_grid_scene(tmp_path, **keys):
+    file = write_table(tmp_path / "creep.csv", (T, zener(E0, EINF, OFF)(T) / E0))
+    return fit_scene({"material": "viscoelastic", "poisson": NU, "creep": "fit",
+                      "file": str(file), "table_kind": "creep", **keys})
+
+
+def test_fit_scene_off_grid_runs_the_exact_material(tmp_path):
+    """creep = "fit" on the off-grid Zener creep table runs creep = "zener" (24^2, 10
+    steps) within 1e-6 (measured 8e-15); the archive records the fit's compliance error
+    (< 1e-9) and the bound it met (1 %)."""
+    fitted = off_grid_scene(tmp_path)
+    ref = fit_scene({"material": "viscoelastic", "young": E0, "poisson": NU,
+                     "creep": "zener", "relaxed_young": EINF, "retardation_time": OFF})
+    a = cp.simulate(fitted)
+    assert_same_run(a, cp.simulate(ref), 1e-6)
+    assert a.attrs["halfspace_fit_compliance_error"] < 1e-9
+    assert a.attrs["halfspace_fit_tolerance"] == 0.01
+
+
+def test_fit_scene_refuses_a_fit_above_the_bound(tmp_path):
+    """With the time constants held on the grid (free_times = false) the fit is 3.2 % off:
+    refused by the default bound (1 %) naming the key that raises it; accepted when it is
+    raised, the archive recording the error (3.2 %) and the bound (5 %). Four per decade
+    put a time at 10^0.25: the fixed grid is then exact (measured 7e-10)."""
+    with pytest.raises(cp.SceneError, match=r"halfspace\.file = .*: the fitted creep "
+                       r"compliance is 0\.032\d* off the creep data, above "
+                       r"halfspace\.fit_tolerance = 0\.01; give more "
+                       r"halfspace\.terms_per_decade .* or raise halfspace\.fit_tolerance"):
+        off_grid_scene(tmp_path, free_times=False)
+    sc = off_grid_scene(tmp_path, free_times=False, fit_tolerance=0.05)
+    ds = cp.simulate(sc.replace({"time.steps": 2}))
+    assert ds.attrs["halfspace_fit_compliance_error"] == pytest.approx(0.0321, abs=5e-4)
+    assert ds.attrs["halfspace_fit_tolerance"] == 0.05
+    four = off_grid_scene(tmp_path, free_times=False, terms_per_decade=4)
+    assert four.halfspace.fit().compliance_error < 1e-8
+
+
+def test_fit_scene_time_constants_and_terms_per_decade_exclusive(tmp_path):
+    with pytest.raises(cp.SceneError, match=r"halfspace\.time_constants and "
+                       r"halfspace\.terms_per_decade both give the fit's time constants"):
+        off_grid_scene(tmp_path, time_constants=[1.0], terms_per_decade=3)
+    sc = off_grid_scene(tmp_path, time_constants=[OFF], free_times=False)
+    assert sc.halfspace.fit().times == (pytest.approx(OFF),)
+    assert cp.Scene.from_toml_text(sc.to_toml()) == sc

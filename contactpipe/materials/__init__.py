@@ -38,9 +38,9 @@ import numpy as np
 from .creep import (ELASTIC, ExponentialCreep, TabulatedCreep, bulk_ratio, combine,
                     elastic_bulk_parts, kelvin_voigt, maxwell, prony, relaxation_from_creep,
                     step_start_stable_step, zener)
-from .fitting import (TABLE_KINDS, PronyFit, fit_creep_compliance, fit_dynamic_moduli,
-                      fit_relaxation_modulus, fit_table_file, read_table_file,
-                      table_time_span)
+from .fitting import (FIT_TOLERANCE, TABLE_KINDS, PronyFit, compliance_error,
+                      fit_creep_compliance, fit_dynamic_moduli, fit_relaxation_modulus,
+                      fit_table_file, read_table_file, table_time_span)
 
 __all__ = [
     "ExponentialCreep", "TabulatedCreep", "ELASTIC", "maxwell", "kelvin_voigt", "zener",
@@ -48,6 +48,7 @@ __all__ = [
     "PronyFit", "fit_creep_compliance", "fit_relaxation_modulus", "fit_dynamic_moduli",
     "combine", "relaxation_from_creep", "bulk_ratio", "elastic_bulk_parts", "BULK",
     "TABLE_KINDS", "read_table_file", "fit_table_file", "table_time_span",
+    "compliance_error", "FIT_TOLERANCE",
 ]
 
 
