@@ -298,8 +298,8 @@ def off_grid_table(kind):
     f = np.logspace(-3, 2, 41)
     tau = OFF / (2 * np.pi)
     wt = 2 * np.pi * f * tau
-    return (f, (EINF + (E0 - EINF) * wt ** 2 / (1 + wt ** 2), (E0 - EINF) * wt / (1 + wt ** 2)),
-            zener(E0, EINF, tau * E0 / EINF))
+    storage = EINF + (E0 - EINF) * wt ** 2 / (1 + wt ** 2)
+    return f, (storage, (E0 - EINF) * wt / (1 + wt ** 2)), zener(E0, EINF, tau * E0 / EINF)
 
 
 FITS = {"creep": fit_creep_compliance, "relaxation": fit_relaxation_modulus,

@@ -56,8 +56,9 @@ def test_step_in_the_approach_without_instantaneous_elasticity_refused(approach,
     without instantaneous elasticity under a rigid indenter: one-line SceneError naming
     the key and why."""
     with pytest.raises(cp.SceneError, match=rf"load\.{key} at t = 0 s with halfspace\.creep"
-                       r" = 'kelvin_voigt' \(phi\(0\) = 0\), a rigid indenter: no body has "
-                       r"instantaneous elasticity, so a step there needs an infinite force"):
+                       r" = 'kelvin_voigt' \(phi\(0\) = 0\), a rigid indenter: no body "
+                       r"has instantaneous elasticity, so a step there needs an infinite "
+                       r"force"):
         punch_scene(approach)
 
 
@@ -87,8 +88,8 @@ def sphere_scene(halfspace, tangential, preload="frictional", steps=4):
                     friction={"mu": MU},
                     load={"time": [0.0, 1.0], "normal_force": W,
                           "tangential_force": tangential, "preload": preload},
-                    grid={"points": [24, 24], "size": [5 * a, 5 * a]}, time={"steps": steps},
-                    solver={"tolerance": 1e-10})
+                    grid={"points": [24, 24], "size": [5 * a, 5 * a]},
+                    time={"steps": steps}, solver={"tolerance": 1e-10})
 
 
 @pytest.mark.parametrize("body", list(BODIES))

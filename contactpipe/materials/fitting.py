@@ -187,7 +187,8 @@ def _fit_terms(basis, data, times, free, span):
         else:
             terms.append((ti, ci))
     fixed = np.where(coef[:nf] > 1e-7 * coef.max(), coef[:nf], 0.0)
-    out = (np.concatenate([fixed, [ci for _, ci in terms]]), np.array([t for t, _ in terms]))
+    out = (np.concatenate([fixed, [ci for _, ci in terms]]),
+           np.array([ti for ti, _ in terms]))
 
     def cost(coef, times):
         return np.sum(((basis(times)[0] @ coef - data) * weight) ** 2)
@@ -231,7 +232,8 @@ def compliance_error(t, modulus, fitted_modulus, creep, young, refine=8):
     against the one of measured relaxation data, over the data's times [1].
 
     The data's relaxation function is the fitted one times the ratio data/fit,
-    interpolated linearly in log t between the data's times (held beyond them), and its
+    interpolated linearly in log t between the data's positive times (in t from a datum
+    at 0 to the first, held beyond the data), and its
     compliance solves int_{0-}^t E(t - s) dD(s) = 1: by product integration on the
     data's times with ``refine`` log-spaced points within each interval (D linear
     within a step, the integral of E over a step by Simpson's rule). The same scheme
@@ -255,10 +257,13 @@ def compliance_error(t, modulus, fitted_modulus, creep, young, refine=8):
     for lo, hi in zip(pos[:-1], pos[1:]):
         grid.append(np.geomspace(lo, hi, refine + 1)[1:])
     grid = np.concatenate(grid)
-    lt = np.log(np.maximum(t, pos[0]))
+    first = ratio[1] if t[0] == 0 else ratio[0]         # the ratio at pos[0]
+    start = ratio[0]                                     # ... and at t = 0 (or held)
 
     def data_modulus(x):
-        return fitted_modulus(x) * np.interp(np.log(np.maximum(x, pos[0])), lt, ratio)
+        late = np.interp(np.log(np.maximum(x, pos[0])), np.log(pos), ratio[t > 0])
+        early = start + (first - start) * np.minimum(x, pos[0]) / pos[0]
+        return fitted_modulus(x) * np.where(x < pos[0], early, late)
 
     lag = grid[:, None] - grid[None, :]                  # t_k - t_j
     mid = lag[:, 1:] + 0.5 * np.diff(grid)[None, :]      # t_k - (t_{j-1} + t_j)/2
@@ -266,8 +271,9 @@ def compliance_error(t, modulus, fitted_modulus, creep, young, refine=8):
     def compliance(e):
         h = np.diff(grid)
         ok = lag[:, 1:] >= 0
-        m = np.where(ok, h / 6 * (e(np.where(ok, lag[:, 1:], 0)) + 4 * e(np.where(ok, mid, 0))
-                                  + e(np.where(ok, lag[:, :-1], 0))), 0.0)
+        simpson = (e(np.where(ok, lag[:, 1:], 0)) + 4 * e(np.where(ok, mid, 0))
+                   + e(np.where(ok, lag[:, :-1], 0)))
+        m = np.where(ok, h / 6 * simpson, 0.0)
         e0 = float(e(np.zeros(1))[0])
         g = np.zeros(h.size)
         for k in range(1, grid.size):
