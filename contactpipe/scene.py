@@ -216,9 +216,9 @@ def _check_rigid_start(p, problems):
     if load is None or any(spec is None for _, spec in bodies):
         return
     soft = [(side, spec) for side, spec in bodies if spec.material != "rigid"]
-    if any(spec.material == "elastic" or spec.creep_function().phi0 != 0
-           for _, spec in soft):
-        return
+    if not soft or any(spec.material == "elastic" or spec.creep_function().phi0 != 0
+                       for _, spec in soft):
+        return                            # both rigid: refused above
     prog = load.programs()
     why = ", ".join(f"{side}.creep = {spec.creep!r} (phi(0) = 0)" for side, spec in soft)
     why += "".join(f", a rigid {side}" for side, spec in bodies if spec.material == "rigid")

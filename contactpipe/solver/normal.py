@@ -229,7 +229,7 @@ def _rigid_motion(gap0, control):
     for i, f in enumerate((np.ones_like(gap0), X2, X1)):
         if np.isnan(force[i]) and motion[i] != 0.0:
             b = b - motion[i] * f
-    scale = max(float(np.abs(gap0).max()), float(np.nanmax(np.abs(motion[:1]))), 1e-300)
+    scale = max(float(np.abs(gap0).max()), abs(float(np.nan_to_num(motion[0]))), 1e-300)
     zero = np.zeros_like(gap0)
     if np.any(np.nan_to_num(force) != 0.0) or b.min() < -1e-12 * scale:
         return NormalResult(zero, np.nan, zero, 0, np.inf, False)
