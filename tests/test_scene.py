@@ -554,10 +554,12 @@ def scene_dicts(draw):
     load = {}
     force = st.floats(1e-3, 1e6, **finite)
     commensurate = True  # the knots lie on a uniform mesh (a fretting preset's do)
-    if mu > 0 and draw(st.booleans()):
-        W = draw(force)
+    W = draw(force)
+    fraction = draw(st.floats(0.01, 0.9, **finite))
+    # a fretting preset needs T* = fraction * mu * W > 0: a subnormal mu can round it to 0
+    if W * mu * fraction > 0 and draw(st.booleans()):
         load["normal_force"] = W
-        load["fretting"] = {"amplitude": W * mu * draw(st.floats(0.01, 0.9, **finite)),
+        load["fretting"] = {"amplitude": W * mu * fraction,
                             "window": draw(st.floats(1e-3, 1e3, **finite)),
                             "cycles": draw(st.integers(1, 5)),
                             "direction": draw(st.floats(-360, 360, **finite))}
