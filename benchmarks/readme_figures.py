@@ -22,7 +22,9 @@ average). ``--update-readme`` then rewrites the README's table between the marke
 ``<!-- readme-figures:begin -->`` and ``<!-- readme-figures:end -->`` from that file;
 ``--render FILE.csv`` prints the table of an existing file. The pair counts are exact and
 repeat; the wall times are this machine's on that day (the "floor" column, the time of one
-FFT pair on the padded grid, measured beside each run, shows how fast it was).
+FFT pair on the padded grid, measured beside each run, shows how fast it was, and
+"wall / floor", the wall time over pairs × floor, compares across days). The quantities
+keep ``contactpipe bench``'s names (its table's columns: ``contactpipe.pipeline.bench``).
 
 ``--quick``: 16² grids, 10 steps (the fretting loop and figure 3), 25 steps (memory): a
 smoke run of seconds; give ``--out``, so the checked-in file keeps the
@@ -76,11 +78,13 @@ def fig3_study(n, steps):
             t0 = time.perf_counter()
             with simulate(scene, pathlib.Path(tmp) / "fig3.nc") as ds:
                 wall = time.perf_counter() - t0
-                pairs = int(ds.fft_pairs.values.sum())
+                pairs = int(ds.fft_pairs.values.sum()
+                            + ds.attrs.get("preload_estimate_fft_pairs", 0))
         floor = min(floor, bench._floor_ms(n, "auto", 1)[0])
-        print(f"  tau = {ratio:g} t': {wall:.1f} s ({pairs:,} FFT pairs, floor {floor:.3f} ms)")
+        print(f"  tau = {ratio:g} t': {wall:.1f} s ({pairs:,} FFT pairs, one pair {floor:.3f} "
+              f"ms, wall / floor {wall * 1e3 / (pairs * floor):.1f})")
         rows.append(dict(case="fig3-study", pair="rigid/Maxwell", form=f"tau={ratio:g}t'",
-                         grid=n, steps=steps, wall_s=wall, floor_ms=floor, fft_pairs=pairs))
+                         grid=n, steps=steps, run_s=wall, pair_ms=floor, run_pairs=pairs))
     return rows
 
 
@@ -157,28 +161,34 @@ def _fmt(v, digits=3):
     return f"{v:.{digits}g}"
 
 
+def _run_over_floor(q):
+    """A whole run's wall time over its pairs' floor."""
+    return _fmt(float(q["run_s"]) * 1e3 / (float(q["run_pairs"]) * float(q["pair_ms"])))
+
+
 def _cells(case, q):
-    """(iterations, FFT pairs, first instant, wall, floor) of one row's quantities."""
+    """(iterations, FFT pairs, first instant, wall, floor, wall / floor) of one row's
+    quantities (``contactpipe bench``'s names)."""
+    first = (f"{_fmt(q.get('first_instant_pairs', 0))} + "
+             f"{_fmt(q.get('preload_estimate_pairs', 0))}")
     if case == "normal":
-        return (_fmt(q["iterations"]), _fmt(q["fft_pairs"]), "", f"{_fmt(q['wall_ms'])} ms",
-                f"{_fmt(q['floor_ms'])} ms")
+        return (_fmt(q["iterations_per_step"]), _fmt(q["pairs_per_step"]), "",
+                f"{_fmt(q['ms_per_step'])} ms", f"{_fmt(q['pair_ms'])} ms",
+                _fmt(q["wall_over_floor"]))
     if case == "fretting":
-        return (_fmt(q["iterations_per_step"]), _fmt(q["fft_pairs_per_step"]),
-                f"{_fmt(q['first_instant_fft_pairs'])} + "
-                f"{_fmt(q['preload_estimate_fft_pairs'])}",
-                f"{_fmt(q['ms_per_step'])} ms/step", f"{_fmt(q['floor_ms'])} ms")
+        return (_fmt(q["iterations_per_step"]), _fmt(q["pairs_per_step"]), first,
+                f"{_fmt(q['ms_per_step'])} ms/step", f"{_fmt(q['pair_ms'])} ms",
+                _fmt(q["wall_over_floor"]))
     if case == "paper-fig3":
         return (_fmt(q["iterations_per_step"]),
-                f"{_fmt(q['fft_pairs_per_step'])} ({_fmt(q['fft_pairs_per_step_after_first'])}"
-                f" after the first instant; {_fmt(q['fft_pairs'])} in all)",
-                f"{_fmt(q['first_instant_fft_pairs'])} + "
-                f"{_fmt(q['preload_estimate_fft_pairs'])}",
-                f"{_fmt(q['wall_s'])} s", f"{_fmt(q['floor_ms'])} ms")
+                f"{_fmt(q['pairs_per_step'])} a step after the first instant; "
+                f"{_fmt(q['run_pairs'])} in all", first,
+                f"{_fmt(q['run_s'])} s", f"{_fmt(q['pair_ms'])} ms", _run_over_floor(q))
     if case == "fig3-study":
-        return ("", f"{_fmt(q['fft_pairs'])} in all", "", f"{_fmt(q['wall_s'])} s",
-                f"{_fmt(q['floor_ms'])} ms")
+        return ("", f"{_fmt(q['run_pairs'])} in all", "", f"{_fmt(q['run_s'])} s",
+                f"{_fmt(q['pair_ms'])} ms", _run_over_floor(q))
     return ("", "", "", f"{_fmt(q['ms_per_step_first'])} / {_fmt(q['ms_per_step_last'])} "
-            "ms/step (first / last 10 steps)", "")
+            "ms/step (first / last 10 steps)", "", "")
 
 
 def render(header, rows) -> str:
@@ -191,9 +201,13 @@ def render(header, rows) -> str:
     lines = [f"Measured by `python benchmarks/readme_figures.py` "
              f"([`benchmarks/results/readme.csv`](benchmarks/results/readme.csv): "
              f"{'; '.join(header)}). First instant: its FFT pairs + those of the frictional "
-             "preload's error estimate.", "",
-             "| case | grid, steps | iterations | FFT pairs | first instant | wall | floor |",
-             "|---|---|---|---|---|---|---|"]
+             "preload's error estimate. Floor: the time of one FFT pair on that grid; "
+             "wall / floor: the wall time over pairs × floor, per step after the first "
+             "instant where the wall is per step, of the whole run (every pair counted) "
+             "where it is the run's.", "",
+             "| case | grid, steps | iterations | FFT pairs | first instant | wall | floor "
+             "| wall / floor |",
+             "|---|---|---|---|---|---|---|---|"]
     for key, by_grid in groups.items():
         grids = sorted(by_grid)
         cells = [_cells(key[0], by_grid[g]) for g in grids]
@@ -201,7 +215,7 @@ def render(header, rows) -> str:
         where = " / ".join(f"{g}²" for g, _ in grids) + (
             f", {' / '.join(sorted(steps))} steps" if steps else "")
         cols = [" / ".join(c[i] for c in cells) if any(c[i] for c in cells) else "—"
-                for i in range(5)]
+                for i in range(6)]
         label = LABELS.get(key, " ".join(key))
         lines.append(f"| {label} | {where} | " + " | ".join(cols) + " |")
     return "\n".join(lines)

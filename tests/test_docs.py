@@ -177,9 +177,9 @@ def test_readme_figures_quick_run(tmp_path, capsys):
     assert any("--quick" in line for line in header)
     values = {(r["case"], r["form"], r["quantity"]): float(r["value"]) for r in rows}
     assert all(math.isfinite(v) for v in values.values())
-    pairs = [v for (_, _, q), v in values.items() if q.endswith("fft_pairs")]
+    pairs = [v for (_, _, q), v in values.items() if q.endswith("_pairs")]   # counts
     assert pairs and all(v == int(v) and v >= 0 for v in pairs)
-    assert values[("fretting", "scalar", "preload_estimate_fft_pairs")] > 0   # steel/Al row
+    assert values[("fretting", "scalar", "preload_estimate_pairs")] > 0   # steel/Al row
     assert {(c, f) for c, f, _ in values} >= {
         ("normal", "normal"), ("fretting", "scalar"), ("fretting", "vector"),
         ("paper-fig3", "scalar"), ("paper-fig3", "vector"), ("fig3-study", "tau=1t'"),

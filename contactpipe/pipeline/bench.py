@@ -1,47 +1,95 @@
-"""Speed figures: ``contactpipe bench [CASE ...]`` prints them (never asserted in tests).
+"""Speed figures: ``contactpipe bench [CASE ...]`` prints them and writes them to a CSV file
+(never asserted in tests: a smoke test checks only the table's structure).
 
 The cost unit is one *FFT pair*: one forward plus one inverse real FFT of the padded
-(2N1 x 2N2) grid. Each case prints the pairs spent, the iterations, the wall time, and the
-time of one FFT pair on that grid (the floor: pairs x floor is the least the FFTs cost).
-Planning (pyFFTW plans, kernel spectra) happens once per grid and is reported apart
-("setup s": the first run's extra time); wall times exclude it.
+(2N1 x 2N2) grid, as the solver's convolution engine does it (pyFFTW plans pruned of the
+padding's zero rows, the same threads). Each case prints, per row:
+
+``pairs/step``  FFT pairs a step, as the engine counts them (coarse-grid and window work
+                charged in this grid's pairs);
+``ms/step``     the wall time of a step;
+``pair ms``     the measured time of one FFT pair on that grid (the least of three timed
+                blocks, measured just before and just after the run, the least kept);
+``floor``       pairs/step x pair ms: the least the step's transforms can cost;
+``wall/floor``  ms/step / floor: the step's time in floor pairs, which stays comparable
+                across machines and days when the wall time alone does not.
+
+Both per-step figures leave out the first instant and the setup (FFT plans, kernel
+spectra): they are of the steps after the first, timed from the end of the first instant
+to the end of the last step (:func:`timed_run`); the first instant's pairs and the whole
+run's time are columns of their own. The ``normal`` case is one instant: its figures are
+of that solve, run a second time in the process so that the setup is left out.
 
 Cases
 -----
 normal      Hertz (steel on steel, W = 1 kN, R = 18 mm) over 4a, tolerance 1e-10, grids 64² to 512²
 fretting    the paper's elastic fretting loop (β = 0) and steel on aluminium (β ≠ 0), 40 steps,
-            grids 64² to 256²: pairs and iterations per warm-started step, the first
-            instant's pairs and those of the frictional preload's error estimate
+            grids 64² to 256² (the vector form to 128²), tolerance 1e-9: per step after the
+            first, the first instant's pairs and those of the frictional preload's error
+            estimate
 memory      per-step time at steps 10 and 1000 of a 64² creep run (Maxwell, Prony)
 paper-fig3  rigid sphere on a Maxwell half-space (ν = 0.3, coupling on), 128², 200 steps, end to end
             (``--vector`` adds the vector tangential form)
 long-run    256², 2000 steps streamed to disk: peak resident memory
 
+The table
+---------
+``normal``, ``fretting`` and ``paper-fig3`` write their rows to
+``benchmarks/results/bench-<case>.csv`` (beside the package in a source checkout, else
+under the current folder), or all to ``--csv PATH``, atomically (a reader never sees half a
+file), with the columns of :data:`COLUMNS`: the date (UTC), the commit, the CPUs and the
+one-minute load average during the row's run say on what it was measured. ``--quick``
+(16², 5 steps: seconds) writes no file unless ``--csv`` is given, so the checked-in tables
+keep full figures. ``memory`` and ``long-run`` only print.
+
 Each case also returns its figures as records (one dict per row: the case, the grid, the
-form and the measured quantities), which ``benchmarks/readme_figures.py`` writes to the
-file the README's speed figures are quoted from.
+form and the measured quantities, all numbers), which ``benchmarks/readme_figures.py``
+writes to the file the README's speed figures are quoted from.
 """
 from __future__ import annotations
 
 import argparse
+import csv
+import datetime
+import io
+import math
 import os
+import pathlib
 import resource
+import subprocess
 import tempfile
 import time
 
 import numpy as np
 
 from ..exceptions import SceneError
+from ..files import check_output_path, write_text
 from ..scene import Scene
 from ..simulation import simulate
 from ..solver.convolution import Convolver
 
-__all__ = ["add_arguments", "main", "CASES"]
+__all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
+           "table_rows", "write_table", "default_table_path"]
 
 E_STEEL, NU, R, W, MU = 210e9, 0.3, 0.018, 1000.0, 0.1
 A_HERTZ = (3 * W * R / (4 / (2 * (1 - NU ** 2) / E_STEEL))) ** (1 / 3)
 STEEL = {"material": "elastic", "young": E_STEEL, "poisson": NU}
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
+
+#: The columns of the CSV table, in order: what was run (case, the bodies, grid N for
+#: N x N cells, steps after the first instant, solver tolerance, tangential form), the
+#: figures (see the module's docstring; ``run_pairs`` and ``run_s`` are of the whole run:
+#: every instant's pairs and the preload estimate's, the setup's time) and where and when
+#: it was measured.
+COLUMNS = ("case", "pair", "grid", "steps", "tolerance", "form", "pairs_per_step",
+           "ms_per_step", "pair_ms", "floor_ms_per_step", "wall_over_floor",
+           "first_instant_pairs", "preload_estimate_pairs", "run_pairs", "run_s",
+           "date", "commit", "cpus", "load_average")
+#: The cases that write the table (the others only print).
+TABLE_CASES = ("normal", "fretting", "paper-fig3")
+#: ``--quick``: a smoke run of seconds.
+QUICK = dict(grids=[16], steps=5, memory=(16, 25), long_run=(16, 20))
+_ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def _scene(**kw):
@@ -51,50 +99,116 @@ def _scene(**kw):
     return Scene(**d)
 
 
-def _floor_ms(n, backend, threads):
-    """Milliseconds of one forward + inverse real FFT of the padded n x n grid."""
+def _floor_ms(n, backend, threads, blocks=3):
+    """(milliseconds of one FFT pair of the padded n x n grid, plan time [s]).
+
+    One pair as the solver's engine spends it (:meth:`Convolver.convolve`: forward
+    transform, product with a kernel spectrum, inverse transform), on an engine made as the
+    solver makes its own (same backend, threads and planner; with FFTW's wisdom, the same
+    plans); the least of ``blocks`` timed blocks, so that a busy moment does not count.
+    """
     conv = Convolver(n, n, backend=backend, threads=threads)
     k = conv.kernel_spectrum(np.ones((2 * n, 2 * n)))
     x = np.random.default_rng(0).normal(size=(n, n))
-    reps = max(5, int(2e6 / (n * n)))
+    reps = max(5, min(2000, int(2e6 / (n * n))))
     conv.convolve(k, x)
+    best = math.inf
+    for _ in range(blocks):
+        t0 = time.perf_counter()
+        for _ in range(reps):
+            conv.convolve(k, x)
+        best = min(best, (time.perf_counter() - t0) / reps)
+    return best * 1e3, conv.plan_time_s
+
+
+def _load() -> float:
+    return os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
+
+
+def timed_run(scene, form=None):
+    """Run ``scene`` in memory: (dataset, the run's wall time [s], the wall time of a step
+    after the first instant [ms], the one-minute load average, the higher of before and
+    after).
+
+    A step's time is that from the end of the first instant to the end of the last step,
+    over the steps between: the setup (FFT plans, kernel spectra) and the first instant
+    (its frictional preload, its error estimate) are left out, as the per-step pairs
+    leave them out. NaN for a run of one instant.
+    """
+    stamps = []
+    load = _load()
+    kw = {} if form is None else {"tangential": form}
     t0 = time.perf_counter()
-    for _ in range(reps):
-        conv.convolve(k, x)
-    return (time.perf_counter() - t0) / reps * 1e3, conv.plan_time_s
+    ds = simulate(scene, on_step=lambda k, t, rec: stamps.append(time.perf_counter()), **kw)
+    run_s = time.perf_counter() - t0
+    steps = len(stamps) - 1
+    ms = (stamps[-1] - stamps[0]) / steps * 1e3 if steps > 0 else math.nan
+    return ds, run_s, ms, max(load, _load())
+
+
+def _figures(pairs_per_step, ms_per_step, pair_ms):
+    """The floor of a step and the step's time in floor pairs."""
+    floor = pairs_per_step * pair_ms
+    return dict(pairs_per_step=pairs_per_step, ms_per_step=ms_per_step, pair_ms=pair_ms,
+                floor_ms_per_step=floor,
+                wall_over_floor=ms_per_step / floor if floor > 0 else math.nan)
+
+
+def _step_figures(ds, ms_per_step, pair_ms):
+    """A run's figures per step after the first instant, and its first instant's."""
+    pairs = ds.fft_pairs.values
+    estimate = int(ds.attrs.get("preload_estimate_fft_pairs", 0))
+    return dict(_figures(float(pairs[1:].mean()), ms_per_step, pair_ms),
+                first_instant_pairs=int(pairs[0]), preload_estimate_pairs=estimate,
+                run_pairs=float(pairs.sum()) + estimate,
+                iterations_per_step=float(ds.iterations.values[1:].mean()),
+                passes_per_step=float(ds.coupling_passes.values[1:].mean()))
+
+
+_HEAD = (f"{'pairs/step':>10} {'ms/step':>8} {'pair ms':>8} {'floor ms':>9} {'wall/floor':>10}")
+
+
+def _cells(r):
+    return (f"{r['pairs_per_step']:>10.1f} {r['ms_per_step']:>8.2f} {r['pair_ms']:>8.4f} "
+            f"{r['floor_ms_per_step']:>9.2f} {r['wall_over_floor']:>9.1f}x")
 
 
 def bench_normal(grids, backend, threads):
     rows = []
-    print("normal contact: Hertz, steel on steel, W = 1 kN, R = 18 mm, grid over 4a, tol 1e-10")
-    print(f"{'grid':>9} {'iter':>5} {'pairs':>6} {'pairs/it':>8} {'wall ms':>8} "
-          f"{'floor ms':>9} {'pairs*floor':>11} {'plan s':>7}")
+    print("normal contact: Hertz, steel on steel, W = 1 kN, R = 18 mm, grid over 4a, tol "
+          "1e-10; one instant, solved a second time (setup left out)")
+    print(f"{'grid':>9} {'iter':>5} {_HEAD} {'setup s':>7}")
     for n in grids:
         sc = _scene(load={"time": [0.0], "normal_force": W},
                     grid={"points": [n, n], "size": [4 * A_HERTZ] * 2},
                     solver={"tolerance": 1e-10, "fft": backend, "threads": threads})
+        load = _load()
         t0 = time.perf_counter()
         simulate(sc)                                  # plans and kernel spectra (cached)
         first = time.perf_counter() - t0
+        pair = _floor_ms(n, backend, threads)[0]
         t0 = time.perf_counter()
         ds = simulate(sc)
         wall = (time.perf_counter() - t0) * 1e3
-        plan = first - wall / 1e3                     # planning + kernel spectra, once per grid
-        floor, _ = _floor_ms(n, backend, threads)
-        it, pairs = int(ds.iterations[0]), int(ds.fft_pairs[0])
-        print(f"{n:>4}x{n:<4} {it:>5} {pairs:>6} {pairs / it:>8.2f} {wall:>8.1f} {floor:>9.3f} "
-              f"{pairs * floor:>11.1f} {plan:>7.2f}")
-        rows.append(dict(case="normal", pair="steel/steel", form="normal", grid=n,
-                         iterations=it, fft_pairs=pairs, wall_ms=wall, floor_ms=floor))
+        pair = min(pair, _floor_ms(n, backend, threads)[0])
+        pairs = float(ds.fft_pairs.values[0])
+        r = dict(case="normal", pair="steel/steel", form="normal", grid=n, steps=0,
+                 tolerance=1e-10, iterations_per_step=int(ds.iterations[0]),
+                 **_figures(pairs, wall, pair), first_instant_pairs=int(pairs),
+                 preload_estimate_pairs=0, run_pairs=pairs, run_s=first,
+                 load_average=max(load, _load()))
+        print(f"{n:>4}x{n:<4} {r['iterations_per_step']:>5} {_cells(r)} "
+              f"{first - wall / 1e3:>7.2f}")
+        rows.append(r)
     return rows
 
 
 def bench_fretting(grids, backend, threads, steps=40):
     rows = []
     print(f"fretting loop T: 0 -> .9μW -> -.9μW -> .9μW, μ = 0.1, {steps} steps, grid over 3a, "
-          "tol 1e-9; per step after the first (warm-started)")
-    print(f"{'pair':>16} {'form':>7} {'grid':>9} {'iter/step':>9} {'pairs/step':>10} "
-          f"{'passes':>6} {'first':>6} {'preload':>7} {'ms/step':>8} {'floor ms':>9}")
+          "tol 1e-9; per step after the first instant (warm-started; setup left out)")
+    print(f"{'pair':>16} {'form':>7} {'grid':>9} {'iter/step':>9} {'passes':>6} {_HEAD} "
+          f"{'first':>6} {'preload':>7}")
     Ts = 0.9 * MU * W
     for label, half in (("steel/steel β=0", STEEL), ("steel/Al β≠0", ALUMINIUM)):
         for form in ("scalar", "vector"):
@@ -107,23 +221,17 @@ def bench_fretting(grids, backend, threads, steps=40):
                             grid={"points": [n, n], "size": [3 * A_HERTZ] * 2},
                             time={"steps": steps},
                             solver={"fft": backend, "threads": threads})
-                t0 = time.perf_counter()
-                ds = simulate(sc, tangential=form)
-                wall = time.perf_counter() - t0
-                floor, _ = _floor_ms(n, backend, threads)
-                it = ds.iterations.values[1:].mean()
-                pairs = ds.fft_pairs.values[1:].mean()
-                passes = ds.coupling_passes.values[1:].mean()
-                first = int(ds.fft_pairs.values[0])
-                pre = int(ds.attrs.get("preload_estimate_fft_pairs", 0))
-                print(f"{label:>16} {form:>7} {n:>4}x{n:<4} {it:>9.1f} {pairs:>10.1f} "
-                      f"{passes:>6.1f} {first:>6} {pre:>7} {wall / (steps + 1) * 1e3:>8.1f} "
-                      f"{floor:>9.3f}")
-                rows.append(dict(case="fretting", pair=label, form=form, grid=n, steps=steps,
-                                 iterations_per_step=it, fft_pairs_per_step=pairs,
-                                 passes_per_step=passes, first_instant_fft_pairs=first,
-                                 preload_estimate_fft_pairs=pre,
-                                 ms_per_step=wall / (steps + 1) * 1e3, floor_ms=floor))
+                pair = _floor_ms(n, backend, threads)[0]
+                ds, run_s, ms, load = timed_run(sc, form)
+                pair = min(pair, _floor_ms(n, backend, threads)[0])
+                r = dict(case="fretting", pair=label, form=form, grid=n,
+                         steps=ds.sizes["time"] - 1,
+                         tolerance=float(sc.solver.tolerance),
+                         **_step_figures(ds, ms, pair), run_s=run_s, load_average=load)
+                print(f"{label:>16} {form:>7} {n:>4}x{n:<4} {r['iterations_per_step']:>9.1f} "
+                      f"{r['passes_per_step']:>6.1f} {_cells(r)} "
+                      f"{r['first_instant_pairs']:>6} {r['preload_estimate_pairs']:>7}")
+                rows.append(r)
     return rows
 
 
@@ -155,8 +263,11 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
     rows = []
     Ts = 0.9 * MU * W
     print(f"paper figure 3: rigid sphere on Maxwell (glassy E = 105 GPa, ν = 0.3: the steel "
-          f"pair's composite modulus; coupling on), τ = t', {n}², {steps} steps, end to end, "
-          f"{threads} FFT thread{'s' if threads > 1 else ''}")
+          f"pair's composite modulus; coupling on), τ = t', {n}², {steps} steps, "
+          f"{threads} FFT thread{'s' if threads > 1 else ''}; per step after the first "
+          "instant, and the whole run (setup included)")
+    print(f"{'form':>7} {'iter/step':>9} {'passes':>6} {_HEAD} {'first':>6} {'preload':>7} "
+          f"{'run s':>7} {'run pairs':>9}")
     for form in forms:
         sc = _scene(indenter={"material": "rigid"},
                     halfspace={"material": "viscoelastic", "young": 105e9, "poisson": NU,
@@ -166,31 +277,19 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
                           "tangential_force": [0.0, Ts, -Ts, Ts]},
                     grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
                     solver={"fft": backend, "threads": threads})
-        # the floor pair just before and after the run: this shared machine's speed
-        # varies, and wall / floor is the run's time in floor pairs, comparable across runs
-        floor = _floor_ms(n, backend, threads)[0]
-        t0 = time.perf_counter()
-        ds = simulate(sc, tangential=form)
-        wall = time.perf_counter() - t0
-        floor = min(floor, _floor_ms(n, backend, threads)[0])
-        print(f"  {form:>6}: {wall:.1f} s = {wall / floor * 1e3:,.0f} floor pairs of "
-              f"{floor:.3f} ms (the run spent {ds.fft_pairs.values.sum():,.0f}), "
-              f"{ds.fft_pairs.values.sum() / (steps + 1):.0f} FFT pairs "
-              f"per step ({ds.fft_pairs.values[1:].mean():.0f} after the first instant's "
-              f"{int(ds.fft_pairs.values[0])}, preload estimate "
-              f"{int(ds.attrs.get('preload_estimate_fft_pairs', 0))}), "
-              f"{ds.iterations.values.mean():.0f} iterations per step, "
-              f"{ds.coupling_passes.values[1:].mean():.1f} coupling passes; {ds.attrs['models']}")
-        rows.append(dict(case="paper-fig3", pair="rigid/Maxwell", form=form, grid=n,
-                         steps=steps, wall_s=wall, floor_ms=floor,
-                         fft_pairs=int(ds.fft_pairs.values.sum()),
-                         fft_pairs_per_step=ds.fft_pairs.values.sum() / (steps + 1),
-                         fft_pairs_per_step_after_first=ds.fft_pairs.values[1:].mean(),
-                         first_instant_fft_pairs=int(ds.fft_pairs.values[0]),
-                         preload_estimate_fft_pairs=int(
-                             ds.attrs.get("preload_estimate_fft_pairs", 0)),
-                         iterations_per_step=ds.iterations.values.mean(),
-                         passes_per_step=ds.coupling_passes.values[1:].mean()))
+        pair = _floor_ms(n, backend, threads)[0]
+        ds, run_s, ms, load = timed_run(sc, form)
+        pair = min(pair, _floor_ms(n, backend, threads)[0])
+        r = dict(case="paper-fig3", pair="rigid/Maxwell", form=form, grid=n,
+                 steps=ds.sizes["time"] - 1,
+                 tolerance=float(sc.solver.tolerance), **_step_figures(ds, ms, pair),
+                 run_s=run_s, load_average=load)
+        print(f"{form:>7} {r['iterations_per_step']:>9.1f} {r['passes_per_step']:>6.1f} "
+              f"{_cells(r)} {r['first_instant_pairs']:>6} {r['preload_estimate_pairs']:>7} "
+              f"{run_s:>7.2f} {r['run_pairs']:>9.0f}")
+        print(f"{'':>7} the whole run: {run_s:.2f} s = {run_s / (r['run_pairs'] * pair) * 1e3:.1f}"
+              f" x its {r['run_pairs']:,.0f} pairs' floor ({ds.attrs['models']})")
+        rows.append(r)
     return rows
 
 
@@ -217,11 +316,71 @@ CASES = {"normal": bench_normal, "fretting": bench_fretting, "memory": bench_mem
          "paper-fig3": bench_paper_fig3, "long-run": bench_long_run}
 
 
+# ----------------------------------------------------------------------------- the table
+def _commit() -> str:
+    """The checkout's commit (``+`` when its tracked files differ from it), or ``unknown``
+    outside a git checkout."""
+    def git(*a):
+        return subprocess.run(["git", "-C", str(_ROOT), *a], capture_output=True, text=True,
+                              timeout=10)
+    try:
+        head = git("rev-parse", "--short=7", "HEAD")
+        if head.returncode != 0:
+            return "unknown"
+        dirty = git("diff", "--quiet", "HEAD", "--", ".").returncode != 0
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return head.stdout.strip() + ("+" if dirty else "")
+
+
+def default_table_path(case: str) -> pathlib.Path:
+    """``benchmarks/results/bench-<case>.csv`` of the source checkout the package runs
+    from, or under the current folder when it is installed elsewhere."""
+    results = _ROOT / "benchmarks" / "results"
+    base = results if results.is_dir() else pathlib.Path("benchmarks") / "results"
+    return base / f"bench-{case}.csv"
+
+
+def _cell(v) -> str:
+    if isinstance(v, (float, np.floating)):
+        return f"{float(v):.6g}" if math.isfinite(v) else ""   # never NaN in the file
+    return str(v)
+
+
+def table_rows(records, date=None, commit=None) -> list:
+    """The CSV rows (dicts of :data:`COLUMNS`, as text) of the records of the table cases."""
+    date = date or f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%dT%H:%MZ}"
+    commit = commit or _commit()
+    meta = dict(date=date, commit=commit, cpus=os.cpu_count() or "")
+    return [{c: _cell({**r, **meta}.get(c, "")) for c in COLUMNS}
+            for r in records if r["case"] in TABLE_CASES]
+
+
+def write_table(rows, path) -> pathlib.Path:
+    """Write the rows of :func:`table_rows` to ``path`` as CSV, atomically."""
+    text = io.StringIO()
+    w = csv.DictWriter(text, fieldnames=COLUMNS, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_text(path, text.getvalue())
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("cases", nargs="*", default=["normal"],
                         help=f"which figures to print: {', '.join(CASES)} (default: normal)")
     parser.add_argument("--grids", type=int, nargs="+", default=None,
                         help="grid sizes (cells per side)")
+    parser.add_argument("--steps", type=int, default=None,
+                        help="steps of the fretting loop and of paper-fig3 (default 40, 200)")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"a smoke run of seconds: {QUICK['grids'][0]}² grids, "
+                             f"{QUICK['steps']} steps; writes no table unless --csv is given")
+    parser.add_argument("--csv", default=None, metavar="PATH",
+                        help="write the table of every case run here to PATH (default: each "
+                             "of normal, fretting, paper-fig3 to "
+                             "benchmarks/results/bench-<case>.csv)")
     parser.add_argument("--fft", choices=("auto", "pyfftw", "scipy"), default="auto")
     parser.add_argument("--threads", type=int, default=1,
                         help="FFT threads of each run (default 1, as solver.threads; 2 puts "
@@ -230,19 +389,46 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="paper-fig3: also time the vector tangential form (slow)")
 
 
+def _run_case(case, args):
+    grids, steps = args.grids, args.steps
+    if args.quick:
+        grids, steps = grids or QUICK["grids"], steps or QUICK["steps"]
+    if case == "normal":
+        return bench_normal(grids or [64, 128, 256, 512], args.fft, args.threads)
+    if case == "fretting":
+        return bench_fretting(grids or [64, 128, 256], args.fft, args.threads,
+                              steps=steps or 40)
+    if case == "paper-fig3":
+        return bench_paper_fig3(args.fft, args.threads, steps=steps or 200,
+                                n=grids[0] if grids else 128,
+                                forms=("scalar", "vector") if args.vector else ("scalar",))
+    if args.quick:
+        return CASES[case](args.fft, args.threads,
+                           *QUICK["memory" if case == "memory" else "long_run"])
+    return CASES[case](args.fft, args.threads)
+
+
 def main(args) -> int:
     for case in args.cases:
         if case not in CASES:
             raise SceneError(f"bench case {case!r}: allowed {', '.join(CASES)}")
+    if args.grids and min(args.grids) < 2:
+        raise SceneError(f"bench --grids {min(args.grids)}: allowed whole numbers ≥ 2")
+    if args.steps is not None and args.steps < 1:
+        raise SceneError(f"bench --steps {args.steps}: allowed whole numbers ≥ 1")
+    csv_path = None if args.csv is None else check_output_path(args.csv, "table (--csv)")
+    date = f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%dT%H:%MZ}"
+    tables = []
     for case in args.cases:
-        if case == "normal":
-            bench_normal(args.grids or [64, 128, 256, 512], args.fft, args.threads)
-        elif case == "fretting":
-            bench_fretting(args.grids or [64, 128, 256], args.fft, args.threads)
-        elif case == "paper-fig3":
-            bench_paper_fig3(args.fft, args.threads,
-                             forms=("scalar", "vector") if args.vector else ("scalar",))
-        else:
-            CASES[case](args.fft, args.threads)
+        rows = table_rows(_run_case(case, args), date=date)
+        if rows:
+            tables.append((case, rows))
         print()
+    if csv_path is not None and tables:
+        print(f"wrote {write_table([r for _, rows in tables for r in rows], csv_path)}")
+    elif csv_path is None and args.quick and tables:
+        print("--quick: no table written (give --csv PATH to write one)")
+    elif csv_path is None:
+        for case, rows in tables:
+            print(f"wrote {write_table(rows, default_table_path(case))}")
     return 0

@@ -1,0 +1,76 @@
+"""``contactpipe bench``: the table it prints and writes (structure and consistency only;
+speed is never asserted: the wall times are the machine's of the moment)."""
+import csv
+import math
+
+import pytest
+
+from contactpipe.pipeline import bench, cli
+
+FIGURES = ("pairs_per_step", "ms_per_step", "pair_ms", "floor_ms_per_step",
+           "wall_over_floor", "first_instant_pairs", "run_pairs", "run_s", "cpus")
+RTOL = 2e-5        # the file keeps six significant digits
+
+
+def _read(path):
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        return reader.fieldnames, list(reader)
+
+
+def test_fretting_table_is_written_whole_and_consistent(tmp_path, capsys):
+    """16², 5 steps, both bodies and both forms: four rows of every column, every figure
+    finite and positive, floor = pairs × pair time, wall / floor = wall / floor, the run's
+    pairs = the first instant's + the estimate's + steps × pairs a step, and the run's time
+    at least the steps' (they are part of it)."""
+    out = tmp_path / "results" / "bench-fretting.csv"
+    assert cli.main(["bench", "fretting", "--grids", "16", "--steps", "5",
+                     "--csv", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "wall/floor" in printed and f"wrote {out}" in printed
+    header, rows = _read(out)
+    assert tuple(header) == bench.COLUMNS
+    assert {(r["pair"], r["form"]) for r in rows} == {
+        (p, f) for p in ("steel/steel β=0", "steel/Al β≠0") for f in ("scalar", "vector")}
+    assert not list(tmp_path.glob("results/.*"))                # no temporary file left
+    for r in rows:
+        v = {k: float(r[k]) for k in FIGURES}
+        assert all(math.isfinite(x) and x > 0 for x in v.values()), r
+        assert r["case"] == "fretting" and r["grid"] == "16" and r["steps"] == "5", r
+        assert float(r["tolerance"]) == 1e-9 and r["date"] and r["commit"], r
+        assert float(r["load_average"]) >= 0, r
+        assert v["floor_ms_per_step"] == pytest.approx(v["pairs_per_step"] * v["pair_ms"],
+                                                       rel=RTOL)
+        assert v["wall_over_floor"] == pytest.approx(
+            v["ms_per_step"] / v["floor_ms_per_step"], rel=RTOL)
+        assert v["run_pairs"] == pytest.approx(
+            v["first_instant_pairs"] + float(r["preload_estimate_pairs"])
+            + 5 * v["pairs_per_step"], rel=RTOL)
+        assert v["run_s"] * 1e3 >= 5 * v["ms_per_step"] * (1 - RTOL), r
+        # a step cannot take less time than its transforms: a sanity bound, with room for
+        # the pair being timed in a quieter moment than the run
+        assert v["wall_over_floor"] >= 0.5, r
+    steel_al = [r for r in rows if r["pair"] == "steel/Al β≠0"]
+    assert all(int(r["preload_estimate_pairs"]) > 0 for r in steel_al)   # frictional preload
+
+
+def test_quick_run_writes_no_table_without_csv(capsys):
+    """``--quick`` prints the table and leaves the checked-in files as they were."""
+    target = bench.default_table_path("normal")
+    assert target.name == "bench-normal.csv" and target.parent.name == "results"
+    before = target.stat().st_mtime_ns if target.exists() else None
+    assert cli.main(["bench", "normal", "--quick"]) == 0
+    printed = capsys.readouterr().out
+    assert "no table written" in printed and "16x16" in printed
+    assert (target.stat().st_mtime_ns if target.exists() else None) == before
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--grids", "1"], ("--grids 1", "≥ 2")),
+    (["--steps", "0"], ("--steps 0", "≥ 1")),
+    (["nonsense"], ("'nonsense'", "fretting")),
+])
+def test_bad_arguments_are_refused_in_one_line(capsys, argv, words):
+    assert cli.main(["bench", *argv]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and all(w in err for w in words), err
