@@ -443,8 +443,8 @@ def _fresh(shape, dtype) -> np.ndarray:
     A large one lies on an anonymous private memory map: numpy asks the kernel for huge
     pages on its large allocations (madvise), and where the kernel compacts memory to
     find them on first touch (``defrag = madvise``, the kernel's default) filling a paper
-    fig. 3 run's 420 MB of steps cost 1.1 s instead of 0.29 s on plain pages (this 2-core
-    machine; docs/design-choices.md). The map is private, so a forked process never
+    fig. 3 run's steps cost several times as long as on plain pages
+    (docs/design-choices.md, D23). The map is private, so a forked process never
     shares it, and it is unmapped with the last array that uses it.
     """
     dtype = np.dtype(dtype)

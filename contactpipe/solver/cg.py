@@ -242,8 +242,8 @@ class BlockSums(Constraints):
     def _means(self, v, cells):
         """The mean of v[k] over block k's cells (m, 1, 1), 0 where a block has none: by a
         product with the mask in a kept scratch array (a boolean-indexed copy per block
-        cost 1.7x / 3x more in fit / keep at 128²). The cells are counted block by block:
-        ``count_nonzero`` along an axis sums a cast copy (15 against 3 µs at 2 x 128²)."""
+        cost more). The cells are counted block by block: ``count_nonzero`` along an axis
+        sums a cast copy, slower (docs/design-choices.md, D22)."""
         if self._buf is None or self._buf.shape != v.shape:
             self._buf = np.empty(v.shape)
         sums = np.multiply(v, cells, out=self._buf).reshape(self.m, -1).sum(axis=1)

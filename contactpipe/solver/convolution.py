@@ -98,8 +98,8 @@ class Convolver:
         n1 field rows alone (the padded half of each row is zero), then along x1 over the
         whole column; the inverse runs along x1 over the whole column, then along x2 on
         the n1 rows that are kept. Each transform so skips half of one of its two passes:
-        a pair costs 0.76-0.80 of the unpruned 2D plan's at 64²-512², to rounding the
-        same result (docs/design-choices.md).
+        a pair costs about a fifth less than the unpruned 2D plan's, to rounding the same
+        result (docs/design-choices.md, D6).
         """
         n1, m2 = self.n1, self.m2
         self._planner = planner
@@ -125,8 +125,8 @@ class Convolver:
     def _forward_slot(self, n):
         """The n-th forward spectrum buffer and its two plans (made when first asked
         for; the plans after the first come from FFTW's wisdom): a block product keeps
-        each input's spectrum in its own buffer and copies none (the copy was 9 % of a
-        2 x 2 product at 128²)."""
+        each input's spectrum in its own buffer and copies none (the copy was a
+        measurable share of a 2 x 2 product: docs/design-choices.md, D6)."""
         while len(self._slots) <= n:
             cout = pyfftw.zeros_aligned(self.spec_shape, dtype="complex128")
             kw = dict(threads=self.threads, flags=(self._planner,))
@@ -205,8 +205,8 @@ class Convolver:
 
     def _periodic_plans(self, shape):
         """Plans of the unpadded filter, made with FFTW_ESTIMATE whatever the planner:
-        measured plans ran no faster here (0.20 ms for two 128² fields either way) and
-        cost 0.1-0.17 s each to make, for each grid of a multilevel solve."""
+        measured plans ran no faster here and cost a noticeable fraction of a second
+        each to make, for each grid of a multilevel solve (docs/design-choices.md, D4)."""
         if shape not in self._periodic:
             spec = shape[:-1] + (self.n2 // 2 + 1,)
             with _PLAN_LOCK:

@@ -20,9 +20,9 @@ solved instead as one constrained problem over (p, q1) — the scalar form — o
 shear put on the final pressure's bound by its last step and ended by
 :func:`contactpipe.solver.joint.finish` (:func:`~contactpipe.solver.joint.finish_vector`:
 Coulomb's law exact as after the passes above, without another solve): the same answer
-within the tolerance, in fewer FFT pairs (128²: paper fig. 3 with coupling, scalar form,
-159 → 69 pairs per step when it was built, 30 now; steel-on-aluminium fretting, vector
-form, 193 → 154, 87 now: ``contactpipe bench fretting``, docs/design-choices.md).
+within the tolerance, in fewer FFT pairs (docs/design-choices.md, D11 and D15; today's
+figures: ``contactpipe bench fretting paper-fig3``, which writes them to
+``benchmarks/results/bench-<case>.csv``).
 Where it does not converge, or in the vector form where no cell sticks any more, the
 block Gauss-Seidel passes take over. ``passes`` then counts the joint passes.
 
@@ -255,8 +255,7 @@ class _Instant:
         if self.bound is not None:
             # both CGs tell slip from stick by |q| = mu p: a pass keeps the slip cells on
             # their moved bound, or they start as stick cells and slide back
-            # (docs/design-choices.md: 1.6-2.4x the pairs of a warm-started vector pass;
-            # 14-16 iterations instead of 1-7 for a late preconditioned scalar pass)
+            # (several times the pairs of a pass: docs/design-choices.md, D18)
             q, Aq0 = follow_bound(q, self.bound, bound), None
         self.bound = bound
         if self.vector:

@@ -64,11 +64,9 @@ SNAP = 0.1
 #: tolerance (their product is added once they would exceed it, and at the end) [1].
 LAG = 0.1
 
-#: The filter is shifted by this fraction of the turning cells' median circle curvature
-#: (0.1 / 0.3 / 0.5 / 1: 1156 / 1008 / 1073 / 1154 iterations over a 12-step
-#: steel-on-aluminium fretting at 64²; 0: 3019, unpreconditioned: 1554), along the
-#: turning cells' tangents (0.2 / 0.3 / 0.5 there: 103.4 / 101.5 / 103.4 FFT pairs a step
-#: of the bench's 40-step steel-on-aluminium fretting at 64²) [1].
+#: The filter is shifted by this fraction of the turning cells' median circle curvature,
+#: along the turning cells' tangents: the fewest iterations of the fractions tried, none
+#: (and no filter) far more (docs/design-choices.md, D16) [1].
 CURVATURE_SHIFT = 0.3
 
 #: An axis whose shift d̄_c exceeds this fraction of the self-influence a is filtered in
@@ -77,9 +75,8 @@ CURVATURE_SHIFT = 0.3
 #: does not depend on it, a ∝ cell size) [1].
 BAND_GATE = 0.5
 
-#: The low band's cells are scaled as at the stiffness LOW_BAND x d̄_c (6 / 8 / 10:
-#: 105.1 / 103.5 / 104.8 FFT pairs a step of the bench's steel-on-aluminium fretting at
-#: 128²) [1].
+#: The low band's cells are scaled as at the stiffness LOW_BAND x d̄_c: the fewest FFT
+#: pairs of the values tried, within 2 % (docs/design-choices.md, D16) [1].
 LOW_BAND = 8.0
 
 #: The largest angle [rad] a turning cell may turn in one step; a cell that would turn
@@ -206,9 +203,9 @@ def curved(tAt, t, curv) -> float:
     (:func:`curvature`; t is tangent there).
 
     The step along a tangent alone, tᵀA t, overshoots where the circle bends away, and a
-    CG whose every set is fixed then converges linearly (a 12-step steel-on-steel fretting
-    at 128² spent 223 FFT pairs a step, solves of 200-285 iterations at about 0.95 per
-    iteration; 56 with this curvature; docs/design-choices.md)."""
+    CG whose every set is fixed then converges linearly, each iteration gaining little;
+    with this curvature the same solves take a fraction of the FFT pairs
+    (docs/design-choices.md, D17)."""
     return float(tAt) + float(np.sum(curv * (t[-2] * t[-2] + t[-1] * t[-1])))
 
 
@@ -255,18 +252,16 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     unshifted filter at every frequency, where one band over-weighted its smooth shear
     (a + d̄_c)/a times (the top eigenvalue of the preconditioned Hessian, which grows as
     the grid is refined), and a turning cell is scaled by its own curvature where the
-    curvature outweighs K̂. One more field filtered (a quarter of an FFT pair): on the
-    bench's steel-on-aluminium fretting the last pass's condition number 7.27 → 4.19 at
-    128², iterations per step 17.0 / 19.2 / 21.7 at 64² / 128² / 256² against 18.9 / 26.2
-    / 36.2 (docs/design-choices.md).
+    curvature outweighs K̂. One more field filtered (a quarter of an FFT pair) buys a
+    smaller condition number and iterations that grow far less with the grid than one
+    band's (docs/design-choices.md, D16).
 
     The curvature outweighs the self-influence 2-10 times on a fretting step's slip
     annulus, so the unshifted filter (the scalar CG's) is no better than the diagonal;
     shifted, the iterations fall by a third. It acts only along the tangents: under a
     fretting load the turning cells slip along ±x1 and turn along x2, so shifting x1 too
-    mis-scaled the stick cells' x1 shear for nothing (the preconditioned Hessian's
-    condition number on a 64² steel-on-aluminium step 5.05 → 4.14, against 3.51 with the
-    slip cells' angles held; docs/design-choices.md)."""
+    mis-scaled the stick cells' x1 shear for nothing (shifting along the tangents alone
+    lowered the preconditioned Hessian's condition number; docs/design-choices.md, D16)."""
     if M is None:
         return np.where(free | turning, gt * (a_self / (a_self + curv)), 0.0)
     if turning.any():
@@ -301,8 +296,8 @@ def shortened(t, tau, rho, turning):
     where every cell takes the whole step. Shortening the cells that would turn too far,
     and not the step of all, keeps the others' progress: capping τ on the first
     tangential step of the bench's fretting (the preload's radial shear turned round to
-    the load) made every step of its second pass a restart, 45 iterations where 6
-    suffice (docs/design-choices.md)."""
+    the load) made every step of its second pass a restart, several times the iterations
+    (docs/design-choices.md, D17)."""
     if not turning.any():
         return None
     spin = magnitude(t[-2:])

@@ -310,8 +310,8 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
         its += res.iterations
         if not res.converged or end.get("sliding"):
             # sliding: no cell sticks, and the projected CG stalls on the turning circles
-            # (a 32² instant at |T| = 0.98 μW took 17 passes, 652 iterations); the passes'
-            # vector solves have the projected gradient for it
+            # (a gross-slip instant took many passes: docs/design-choices.md, D2); the
+            # passes' vector solves have the projected gradient for it
             y = res.x
             return JointResult(y[0], mu * y[1:], mu * lag, np.nan, res.Ax, its, passes,
                                False, res.residual if not res.converged else plan.change)

@@ -19,8 +19,8 @@ __all__ = ["Deferred", "Ledger", "dot"]
 
 def dot(a, b) -> float:
     """Inner product of two fields of one shape, without BLAS: OpenBLAS threads a long
-    ddot, which on a busy 2-core machine made a 256² fretting loop 4x slower (15.7 s
-    against 3.9 s)."""
+    ddot, which on a busy machine made a fretting loop several times slower
+    (docs/design-choices.md, D9)."""
     return float(np.einsum("i,i->", a.ravel(), b.ravel()))
 
 

@@ -260,8 +260,8 @@ class ContactOperator:
 
         σ is the discrete (−Δ)^½ (zero mode set to the smallest other value: M is then
         symmetric positive definite) and g its radial correction, read from the grid's
-        own K33 spectrum (without it, 24 / 29 / 34 / 39 iterations of the bench's Hertz
-        solve at 64² / 128² / 256² / 512², with it 22 / 27 / 31 / 35). Not the inverse of
+        own K33 spectrum (with it the bench's Hertz solve takes fewer iterations on every
+        grid: docs/design-choices.md, D4). Not the inverse of
         the padded K33 circulant itself: with rectangular cells that circulant has
         negative modes, and even clipped to positive it made a worse preconditioner; and
         not on the padded grid, which cost four times the work for the same iterations
@@ -280,8 +280,8 @@ class ContactOperator:
         (:mod:`~contactpipe.solver.symbols`): the scalar joint solve's block-diagonal
         preconditioner (half an FFT pair). The shear's filter is anisotropic: K11 is
         1/(1 − ν_e) times stiffer for modes varying along x2 than along x1, which the
-        isotropic (−Δ)^½ filter shared with the pressure left to the iterations (steel on
-        aluminium fretting, 128²: 18.05 → 15.4 iterations a step, docs/design-choices.md).
+        isotropic (−Δ)^½ filter shared with the pressure left to the iterations (fewer
+        iterations a step of steel-on-aluminium fretting: docs/design-choices.md, D4).
         The coupling blocks K13, K31 are left out (in the filter they cost iterations:
         docs/design-choices.md)."""
         symbol = self._joint_symbols()
@@ -391,8 +391,7 @@ class ContactOperator:
         kernel = np.zeros((2 * c1, 2 * c2))
         kernel[np.ix_(d1 % (2 * c1), d2 % (2 * c2))] = acc
         # FFTW_ESTIMATE: a coarse grid serves a few dozen transforms of a cold start;
-        # measured plans for 64², 32², 16² took 0.35 s together and ran no faster
-        # (0.104 / 0.023 / 0.008 ms a pair against 0.107 / 0.023 / 0.007)
+        # measured plans cost more to make than they saved (docs/design-choices.md, D5)
         coarse = self._derived_on(convolver(c1, c2, conv.backend, conv.threads,
                                             "FFTW_ESTIMATE"),
                                   None if self.cell is None else
@@ -445,9 +444,8 @@ class ContactOperator:
         conv = self.conv
         if not (0 < c1 <= conv.n1 and 0 < c2 <= conv.n2):
             raise ValueError(f"a window of {c1} x {c2} cells on a {conv.n1} x {conv.n2} grid")
-        # FFTW_ESTIMATE: a run meets many window sizes; measured plans took paper fig. 3
-        # (128², 200 steps) from 7.9-9.3 to 10.5-10.6 s without wisdom, and ran no faster
-        # with it (7.0-7.6 s against 6.9-7.2)
+        # FFTW_ESTIMATE: a run meets many window sizes; measured plans made paper fig. 3
+        # slower without wisdom, and no faster with it (docs/design-choices.md, D8)
         sub = self._derived_on(Convolver(c1, c2, backend=conv.backend, threads=conv.threads,
                                          planner="FFTW_ESTIMATE"), self.cell)
         if self.rigid:

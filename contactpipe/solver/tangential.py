@@ -129,8 +129,8 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
         Preconditioned CG with the inverse of K11's model symbol
         (:meth:`ContactOperator.shear_preconditioner`; K11, like K33, behaves as 1/|ξ|,
         1/(1 − ν_e) times stiffer across x1 than along it):
-        1.25 FFT pairs per iteration instead of one, in about half the iterations at 128²
-        and fewer still on finer grids (docs/design-choices.md). False, or an operator
+        1.25 FFT pairs per iteration instead of one, in far fewer iterations, the more so
+        on finer grids (docs/design-choices.md, D4). False, or an operator
         without the filter: plain CG.
 
     Notes

@@ -6,11 +6,9 @@ into k − 1, :meth:`contactpipe.loading.Programs.continuation`) the tractions m
 as they did: q(k−1) + c (q(k−1) − q(k−2)) starts the instant closer than q(k−1) does, and
 so does the pressure continued alike for the joint solve (:func:`continued_start`; the
 block Gauss-Seidel passes' first normal solve starts from p(k−1), cheaper from it).
-Measured at 128², 40-step fretting: steel on aluminium 67.2 → 63.8 FFT pairs a step in the
-one-component form with the shear continued, 61.6 with the pressure too; 142.7 → 130.7 in
-the vector form (130.5 with the pressure); steel on steel 14.5 → 14.0 and 41.5 → 39.7
-(docs/design-choices.md). At a knot's turn or a reversal it is not used: the last
-increments say nothing of the next ones there.
+On the bench's fretting loop it saves FFT pairs in both forms, the most where the
+passes are many (steel on aluminium; docs/design-choices.md, D19). At a knot's turn or a
+reversal it is not used: the last increments say nothing of the next ones there.
 
 Under a growing normal load on a gap homogeneous of degree d in the distance from its apex
 (a sphere or an ellipsoid: d = 2), the contact grows self-similarly: its size goes as
@@ -18,9 +16,8 @@ W^(1/(d+1)) and the tractions, pressure and Spence's shear alike, keep their sha
 stretched in x by λ and scaled by W/(λ² W_from) (Spence 1975; for a sphere λ = (W/W_from)^(1/3)
 and both fields scale by λ). The sub-steps of a frictional preload (graded fractions
 (k/n)²) grow the contact by tens of per cent each, so the previous sub-step's fields,
-stretched so, start the next one much closer than as they are: measured at 128², steel on
-aluminium, the 8 sub-steps of the run's preload cost 957 FFT pairs instead of 1 251
-(docs/design-choices.md, "The first instant").
+stretched so, start the next one much closer than as they are, and the preload's
+sub-steps cost fewer FFT pairs (docs/design-choices.md, D20).
 
 It is only a start: the solves still run to the tolerance from it, and the path memory of
 friction (the previous relative displacement) is not touched.

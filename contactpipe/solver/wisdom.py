@@ -4,10 +4,10 @@ Only the pyFFTW path uses it (:mod:`.convolution` imports this module where pyFF
 installed).
 
 Measuring the pruned DC-FFT plans (:class:`contactpipe.solver.convolution.Convolver`,
-``FFTW_MEASURE``) takes 0.17 / 0.28 / 0.44 / 0.67 s at 64² / 128² / 256² / 512² on the
-development machine, in every process: every run, and every worker of a sweep. FFTW can
-export what it learnt ("wisdom") and take it back; with it, the same plans are made in
-2–4 ms (64², 128²). The plans are then also the same from one process to the next, and so is
+``FFTW_MEASURE``) takes a sizeable fraction of a second per grid, in every process: every
+run, and every worker of a sweep. FFTW can export what it learnt ("wisdom") and take it
+back; with it, the same plans are made in milliseconds (docs/design-choices.md, D8). The
+plans are then also the same from one process to the next, and so is
 their rounding (without wisdom each process measures afresh and may choose other
 algorithms, which moves results by rounding and pair counts by a few pairs).
 
