@@ -74,3 +74,11 @@ def test_bad_arguments_are_refused_in_one_line(capsys, argv, words):
     assert cli.main(["bench", *argv]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and all(w in err for w in words), err
+
+
+def test_a_folder_as_table_is_refused_before_any_run(tmp_path, capsys):
+    """``--csv`` naming a folder: exit 2, one line naming the option, nothing run."""
+    assert cli.main(["bench", "fretting", "--csv", str(tmp_path)]) == 2
+    captured = capsys.readouterr()
+    assert "--csv" in captured.err and len(captured.err.strip().splitlines()) == 1
+    assert captured.out == "" and list(tmp_path.iterdir()) == []

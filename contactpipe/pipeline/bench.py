@@ -371,7 +371,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("cases", nargs="*", default=["normal"],
                         help=f"which figures to print: {', '.join(CASES)} (default: normal)")
     parser.add_argument("--grids", type=int, nargs="+", default=None,
-                        help="grid sizes (cells per side)")
+                        help="grid sizes (cells per side; paper-fig3 takes the first)")
     parser.add_argument("--steps", type=int, default=None,
                         help="steps of the fretting loop and of paper-fig3 (default 40, 200)")
     parser.add_argument("--quick", action="store_true",
