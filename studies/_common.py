@@ -193,7 +193,8 @@ def md_errors(collector_or_ds, scene, *, mu, W, a, p0, compliance, every=1):
     - ``traction``: max over the instants of |q1 - q1_MD| / (mu p0) along x1 through the
       centre (mean of the two middle rows against the cell-averaged closed form),
       leaving out cells within 1.5 cells of a current or remembered stick/slip circle
-      (the square-root kink), as tests/test_tangential.py measures it;
+      (the square-root kink): the studies' centre-line measure (``contactpipe
+      compare`` takes every cell: its ``err_q1_max``, ``err_q1_max_interior``);
     - ``traction_plain``, ``traction_rms``: the same over every cell, max and RMS;
     - ``traction_mean``: the mean of |q1 - q1_MD| / (mu p0) over the cells of the line
       inside the contact (|x1| < a), worst instant: converges with the grid, where the

@@ -12,7 +12,8 @@ it) and:
 * 3 - another process holds the lock (a resumable run of the same target, a sweep or a
   pipeline run on the same folder); nothing is touched;
 * 130 - interrupted by Ctrl-C (SIGINT); 143 - terminated by SIGTERM; 129 - by SIGHUP
-  (128 + the signal number). Both termination signals are handled like Ctrl-C: temporary
+  (128 + the signal number); 141 - the reader of the output went away (SIGPIPE,
+  ``contactpipe compare ... | head``: no message, no traceback). Both termination signals are handled like Ctrl-C: temporary
   files are removed, a resumable run keeps its part file and checkpoint.
 
 Warnings are printed as one line each (``contactpipe: warning: ...``).
@@ -25,6 +26,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import os
 import pathlib
 import signal
 import sys
@@ -128,6 +130,16 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
           file=file or sys.stderr)
 
 
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so that the flush at exit does not raise again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # no real file descriptor (captured)
+        pass
+
+
 def _error(err, code: int, with_type: bool = False) -> int:
     print(f"contactpipe: error: {one_line(err, with_type=with_type)}", file=sys.stderr)
     return code
@@ -147,11 +159,15 @@ def main(argv=None) -> int:
         with signals_as_interrupt(), warnings.catch_warnings(), defer():
             warnings.showwarning = _show_warning
             code = int(args.func(args) or 0)
+            sys.stdout.flush()           # a closed pipe shows here, not at exit
             late = pending()
             if late is not None and code == 0:
                 print(f"contactpipe: {signal.Signals(late).name} came after the output was "
                       f"published: the run is complete", file=sys.stderr)
             return code
+    except BrokenPipeError:              # the reader left (``| head``): stop quietly
+        _silence_stdout()
+        return 128 + signal.SIGPIPE
     except KeyboardInterrupt as err:     # Ctrl-C, SIGTERM, SIGHUP (Interrupted)
         signum = getattr(err, "signum", signal.SIGINT)
         where = getattr(err, "resume_from", None)

@@ -224,12 +224,16 @@ def closed_form_for(ds) -> str | None:
 
 
 def no_closed_form_message(scene, why, label) -> str:
-    """The one-line refusal when :func:`diagnose` finds no closed form: each candidate
-    and why it does not apply, and what to do instead."""
-    reasons = "; ".join(f"{name} {', '.join(msgs)}" for name, msgs in why.items())
-    return (f"{label}: no closed form applies to scene {scene.name!r} ({reasons}); "
-            f"compare it with a reference archive instead: contactpipe compare ARCHIVE.nc "
-            f"REFERENCE.nc")
+    """The one-line refusal when :func:`diagnose` finds no closed form: the nearest
+    candidate (the one that misses fewest conditions) and its first unmet condition,
+    and what to do instead. :func:`diagnose` gives every candidate's reasons."""
+    hint = "compare with a reference archive: contactpipe compare ARCHIVE.nc REFERENCE.nc"
+    if not why:
+        return f"{label}: no closed form applies; {hint}"
+    name = min(why, key=lambda k: len(why[k]))          # ties: the first in CLOSED_FORMS
+    more = len(why[name]) - 1
+    reason = why[name][0].split(", got ")[0] + (f" (+{more} more)" if more else "")
+    return f"{label}: no closed form applies (nearest: {name} {reason}); {hint}"
 
 
 def cell_average_field(f, x1, x2, d1, d2, radius=np.inf, order=8, rows=64):
