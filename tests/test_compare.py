@@ -94,7 +94,7 @@ def test_mindlin_deresiewicz_errors(archives):
     # dissipation 1.2e-4.
     assert err["err_p_max"] < 0.06, f"Hertz pressure: {err['err_p_max']:.3g}"
     assert err["err_p_rms"] < 0.01
-    assert err["err_q1_max"] < 0.15, f"Mindlin-Deresiewicz traction: {err['err_q1_max']:.3g}"
+    assert err["err_q1_max"] < 0.15, f"MD traction: {err['err_q1_max']:.3g}"
     assert err["err_q1_max_interior"] < 0.04
     assert err["err_q1_rms"] < 0.03
     # the headline is the largest error over every cell and instant, nothing left out:

@@ -12,9 +12,10 @@ it) and:
 * 3 - another process holds the lock (a resumable run of the same target, a sweep or a
   pipeline run on the same folder); nothing is touched;
 * 130 - interrupted by Ctrl-C (SIGINT); 143 - terminated by SIGTERM; 129 - by SIGHUP
-  (128 + the signal number); 141 - the reader of the output went away (SIGPIPE,
-  ``contactpipe compare ... | head``: no message, no traceback). Both termination signals are handled like Ctrl-C: temporary
-  files are removed, a resumable run keeps its part file and checkpoint.
+  (128 + the signal number). Both termination signals are handled like Ctrl-C: temporary
+  files are removed, a resumable run keeps its part file and checkpoint;
+* 141 - the reader of the output went away (SIGPIPE, ``contactpipe compare ... | head``):
+  no message, no traceback.
 
 Warnings are printed as one line each (``contactpipe: warning: ...``).
 

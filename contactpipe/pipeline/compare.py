@@ -28,9 +28,9 @@ cells, omega1 relative to the amplitude of the closed-form loop. Against a refer
 archive each difference is relative to max |reference| (tractions: its max p), floored by
 the contact's own scale of the quantity's unit (:func:`physical_scales`: p0, W, W a, the
 approach, ...; the table's ``scale_floors``), so that a quantity that is rounding noise in
-both archives (a torque without twist) reads as noise, not as an O(1) error. Closed-form fields are
-averaged over each cell (:func:`contactpipe.analytic.cell_average`), which is what a
-piecewise-constant traction should match.
+both archives (a torque without twist) reads as noise, not as an O(1) error. Closed-form
+fields are averaged over each cell (:func:`contactpipe.analytic.cell_average`), which is
+what a piecewise-constant traction should match.
 """
 from __future__ import annotations
 
