@@ -221,8 +221,14 @@ def test_plot_functions_draw_into_given_axes(fretting_sweep):
     assert plot_fretting_map(fretting_sweep, ax=ax1) is fig
     assert plot_energy_ratio(fretting_map(fretting_sweep), ax=ax2) is fig
     assert ax1.get_ylabel().startswith("friction coefficient")
-    assert plot_fretting_map(fretting_sweep, against="W").axes[0].get_ylabel().startswith(
+    table = fretting_map(fretting_sweep)
+    varied = table.assign(W=("member", [500.0, 1000.0, 500.0, 1000.0]))
+    assert plot_fretting_map(varied, against="W").axes[0].get_ylabel().startswith(
         "normal force")
+    # every member has W = 1000 N: a map against W would be one line of points
+    with pytest.raises(ArchiveError, match=r"against = 'W': every member has W = 1000, "
+                                           r"one value.*load.normal_force.*against = 'mu'"):
+        plot_fretting_map(table, against="W")
 
 
 def test_cli_fretting_map(fretting_sweep, tmp_path, capsys):
@@ -247,3 +253,9 @@ def test_cli_fretting_map(fretting_sweep, tmp_path, capsys):
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "not a fretting loop" in err
     assert not bad.exists()
+    # --against W on a sweep of one W: refused, one line, exit 2, nothing written
+    assert cli_main(["plot", str(fretting_sweep), "--kind", "fretting-map", "--against",
+                     "W", "-o", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "every member has W = 1000" in err
+    assert "Traceback" not in err and not bad.exists()

@@ -1,5 +1,7 @@
 """The plotting stage: every figure is a PNG of the expected pixel size; the standard set
 follows the archive; sweeps plot one curve per member; the CLI."""
+import io
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -301,3 +303,61 @@ def test_inputs_are_opened_one_way(archives, stress_file, tmp_path):
         plot.plot_radii(tmp_path)
     with pytest.raises(ArchiveError, match="no such archive"):
         plot.plot_radii(tmp_path / "absent.nc")
+
+
+# --------------------------------------------------------------------------- legibility
+
+def test_sweep_shows_an_area_in_mm2_without_an_offset(tmp_path):
+    """The overlay of contact_area reads 'contact area [mm²]' with the values in mm²
+    (0.4-0.8 mm² here), not 'contact_area (contact area) [m2]' over a 1e-6 multiplier."""
+    members = [cp.simulate(fretting_scene(n=16, steps=6, size=4.0, mu=mu))
+               for mu in (0.1, 0.15)]
+    sw = xr.concat(members, dim=xr.DataArray([0.1, 0.15], dims="mu", name="mu"),
+                   combine_attrs="drop_conflicts")
+    fig = plot.plot_sweep(sw)
+    ax = fig.axes[0]
+    fig.canvas.draw()
+    assert ax.get_ylabel() == "contact area [mm²]"
+    assert ax.yaxis.get_offset_text().get_text() == ""
+    top = max(float(np.max(line.get_ydata())) for line in ax.lines)
+    assert top == pytest.approx(float(sw.contact_area.max()) * 1e6, rel=1e-12)
+    assert plot.plot_sweep(sw, "omega1").axes[0].get_ylabel().endswith("[µm]")
+
+
+def test_maps_fill_the_figure(archives):
+    """The three maps side by side, their colour bars beneath: each map at least 200
+    pixels wide of the 800 (they were 155, with 40 % of the figure empty)."""
+    for kind in ("md", "creep"):
+        fig = plot.plot_maps(archives[kind])
+        fig.savefig(io.BytesIO(), format="png", dpi=plot.DPI)     # lays the figure out
+        maps = [a for a in fig.axes if a.get_title()]
+        assert [a.get_title() for a in maps] == ["pressure p", "shear traction |q|",
+                                                 "status"]
+        widths = [a.get_window_extent().width for a in maps]
+        assert min(widths) > 200, widths
+        tops = {round(a.get_window_extent().y1) for a in maps}
+        assert len(tops) == 1, tops                    # aligned, frictionless or not
+
+
+def test_closed_form_is_drawn_on_top(archives):
+    """The closed form's curves are black dashes above every numerical curve."""
+    for fig in (plot.plot_profiles(archives["md"]), plot.plot_radii(archives["md"]),
+                plot.plot_hysteresis(archives["md"])):
+        for ax in fig.axes:
+            closed = [ln for ln in ax.lines
+                      if ln.get_linestyle() == "--" and len(ln.get_xdata())]
+            numerical = [ln for ln in ax.lines if ln.get_marker() not in ("None", None, "")]
+            assert closed and numerical
+            assert min(ln.get_zorder() for ln in closed) > max(
+                ln.get_zorder() for ln in numerical)
+
+
+def test_stress_section_starts_at_the_surface(stress_file):
+    """The x1-x3 section runs from the surface (x3 = 0 at the top) to the deepest depth
+    (0.15 mm), not from half a depth step above the surface; the colour bar names the
+    field in mathtext."""
+    fig = plot.plot_stress(stress_file)
+    section = fig.axes[0]
+    assert section.get_ylim() == pytest.approx((0.15, 0.0), abs=1e-12)
+    bars = [a.get_ylabel() for a in fig.axes if a.get_ylabel().endswith("[MPa]")]
+    assert bars and all(r"$\sigma_\mathrm{vM}$" in b for b in bars), bars

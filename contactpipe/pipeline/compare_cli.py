@@ -4,8 +4,8 @@ Checks an archive against the closed form of its scene, or against a reference a
 prints the largest value of each error and when it occurs, and writes the error table
 (netCDF or CSV) and the profiles figure when asked. The table comes from
 :func:`contactpipe.pipeline.compare.compare`, the figure from
-:func:`contactpipe.pipeline.plot.plot_profiles` (the closed form or the reference in
-grey); every output path is checked before any work.
+:func:`contactpipe.pipeline.plot.plot_profiles` (the closed form dashed or the reference
+dotted, on top of the numerical curves); every output path is checked before any work.
 """
 from __future__ import annotations
 

@@ -9,10 +9,11 @@ the fretting map of a displacement-controlled fretting sweep. Each kind of input
 apply to the input is one line on stderr and exit status 2, nothing written.
 
 - :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
-  instants, the closed form (or a reference archive) in grey (as the paper's figures 2
-  and 3); pH, aH are the Hertz peak pressure and contact radius of the scene with its
-  instantaneous moduli.
-- :func:`plot_maps`: p, |q| and the stick/slip status at one instant, axes in mm.
+  instants, the closed form (black dashes) or a reference archive (black dots) drawn
+  on top of the numerical curves (as the paper's figures 2 and 3); pH, aH are the Hertz
+  peak pressure and contact radius of the scene with its instantaneous moduli.
+- :func:`plot_maps`: p, |q| and the stick/slip status at one instant, axes in mm, side by
+  side with their colour bars beneath.
 - :func:`plot_hysteresis`: the fretting loop T1 against omega1.
 - :func:`plot_radii`: contact and stick radii against time.
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
@@ -80,9 +81,13 @@ INPUTS = {
     "stress": ("a stress file", ("stress",)),
     "sweep": ("a sweep folder", ("sweep", "fretting-map")),
 }
-GREY = "0.6"
-GREY_WIDE = "0.78"          # a wide light line under the numerical one
+#: The closed form: black dashes on top of the numerical curves (never hidden under them).
+CLOSED_STYLE = {"color": "k", "ls": "--", "lw": 1.1, "zorder": 4}
+#: A reference archive: black dots on top.
+REFERENCE_STYLE = {"color": "k", "ls": ":", "lw": 1.4, "zorder": 4}
 STATUS_COLOURS = ("#e6e6e6", "#2c7bb6", "#d7191c")     # separated, stick, slip
+#: A map's colour bar under it (the maps side by side then take the figure's width).
+COLORBAR_BELOW = {"location": "bottom", "fraction": 0.05, "pad": 0.1, "aspect": 30}
 
 
 # --------------------------------------------------------------------------- figures
@@ -302,7 +307,7 @@ def _default_instants(ds, count=5):
 
 
 def _solution(ds) -> ClosedForm | None:
-    """The closed form to draw in grey, or None (none applies, or it cannot be built)."""
+    """The closed form to draw, or None (none applies, or it cannot be built)."""
     try:
         if closed_form_for(ds) is None:
             return None
@@ -322,34 +327,31 @@ def _instants(ds, instants) -> list:
 
 
 def _draw_closed_form(sol, k, xf, x2_row, scale, ax_p, ax_q):
-    """The closed-form profiles at instant k, in grey under the numerical ones."""
+    """The closed-form profiles at instant k, dashed on top of the numerical ones."""
     with np.errstate(all="ignore"):
         if sol.has_field_pressure():
             pc = sol.pressure(k, xf, x2_row) / scale[0]
             pc = np.where(np.isfinite(pc), pc, np.nan)
-            ax_p.plot(xf / scale[1], pc, "-", color=GREY, lw=1.0, zorder=0)
+            ax_p.plot(xf / scale[1], pc, **CLOSED_STYLE)
         if ax_q is not None and sol.has_field_shear():
-            ax_q.plot(xf / scale[1], sol.shear(k, xf, x2_row) / scale[0], "-", color=GREY,
-                      lw=1.0, zorder=0)
+            ax_q.plot(xf / scale[1], sol.shear(k, xf, x2_row) / scale[0], **CLOSED_STYLE)
 
 
 def _draw_reference(ref, tn, scale, ax_p, ax_q):
-    """The reference archive's profiles at its instant nearest t_norm = tn, in grey."""
+    """The reference archive's profiles at its instant nearest t_norm = tn, dotted."""
     tr = np.asarray(ref["time"].values, float)
     ref_t = (tr - tr[0]) / (tr[-1] - tr[0]) if tr[-1] > tr[0] else np.zeros_like(tr)
     j = int(np.argmin(np.abs(ref_t - tn)))
     rows = centre_rows(ref["x2"].values)
     xr1 = np.asarray(ref["x1"].values, float) / scale[1]
-    ax_p.plot(xr1, _profile(ref["p"], j, rows) / scale[0], "-", color=GREY, lw=1.0,
-              zorder=0)
+    ax_p.plot(xr1, _profile(ref["p"], j, rows) / scale[0], **REFERENCE_STYLE)
     if ax_q is not None and "q1" in ref:
-        ax_q.plot(xr1, _profile(ref["q1"], j, rows) / scale[0], "-", color=GREY, lw=1.0,
-                  zorder=0)
+        ax_q.plot(xr1, _profile(ref["q1"], j, rows) / scale[0], **REFERENCE_STYLE)
 
 
 def _profiles(ds, ks, sol, ref, fig):
     """Draw the profiles of ``ds`` at the instants ``ks`` into ``fig`` (closed form
-    ``sol`` or reference Dataset ``ref`` in grey); returns the figure."""
+    ``sol`` dashed or reference Dataset ``ref`` dotted, on top); returns the figure."""
     pH, aH, (pn, an) = _scales(ds)
     x1, x2, _, _ = grid_of(ds)
     rows = centre_rows(x2)
@@ -374,9 +376,10 @@ def _profiles(ds, ks, sol, ref, fig):
             _draw_reference(ref, tn, (pH, aH), ax_p, ax_q)
     grey_label = (f"closed form ({sol.name.replace('_', '-')})" if sol is not None else
                   "reference archive" if ref is not None else None)
+    grey_style = CLOSED_STYLE if sol is not None else REFERENCE_STYLE
     for ax, name in zip(panels, ("p", "q1")):
         if grey_label:
-            ax.plot([], [], "-", color=GREY, label=grey_label)
+            ax.plot([], [], **grey_style, label=grey_label)
         ax.set_ylabel(f"{name} / {pn}")
         ax.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
         ax.grid(True, lw=0.3, alpha=0.5)
@@ -409,10 +412,10 @@ def plot_profiles(ds, instants=None, *, closed_form=True, reference=None, fig=No
         Default: about five instants spread over the run, the turning points of T1
         included.
     closed_form : bool
-        Draw the closed form in grey where
+        Draw the closed form (black dashes, on top) where
         :func:`contactpipe.pipeline.reference.closed_form_for` gives one.
     reference : xarray.Dataset or path, optional
-        A reference archive drawn in grey instead of the closed form, at its instants
+        A reference archive drawn (black dots) instead of the closed form, at its instants
         nearest in t_norm = (t - t0)/window.
     fig : matplotlib.figure.Figure, optional
         Draw into it (one axes for p, a second for q1 if the archive has shear); default
@@ -450,39 +453,41 @@ def _map_shear(fig, ax, ds, k, extent, p_max):
         fq, uq = _prefixed(float(q.max()) if q.max() > 0 else p_max)
         im = ax.imshow(q.T / fq, origin="lower", extent=extent, cmap="magma",
                        interpolation="nearest")
-        fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=f"|q| [{uq}]")
+        fig.colorbar(im, ax=ax, **COLORBAR_BELOW, label=f"|q| [{uq}]")
     else:
-        ax.imshow(np.zeros((ds.sizes["x2"], ds.sizes["x1"])), origin="lower", extent=extent,
-                  cmap="Greys", vmin=0, vmax=1, interpolation="nearest")
+        im = ax.imshow(np.zeros((ds.sizes["x2"], ds.sizes["x1"])), origin="lower",
+                       extent=extent, cmap="Greys", vmin=0, vmax=1, interpolation="nearest")
+        fig.colorbar(im, ax=ax, **COLORBAR_BELOW).ax.set_visible(False)    # aligned maps
         ax.text(0.5, 0.5, "frictionless:\nno shear", transform=ax.transAxes,
                 ha="center", va="center", fontsize=9)
     ax.set_title("shear traction |q|", fontsize=9)
 
 
-def _map_status(ax, ds, k, extent):
+def _map_status(fig, ax, ds, k, extent):
     # matplotlib is imported here, not at the top: a heavy import that only drawing needs
     from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.patches import Patch
     status = np.asarray(ds["status"].isel(time=k).values, float)
-    cmap = ListedColormap(STATUS_COLOURS)
-    norm = BoundaryNorm([-0.5, 0.5, 1.5, 2.5], cmap.N)
-    ax.imshow(status.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
-              interpolation="nearest")
     mu = None
     with contextlib.suppress(ArchiveError):
         mu = float(scene_of(ds).friction.mu)
-    names = ("separated", "stick", "slip") if mu != 0 else \
-        ("separated", "stick", "contact (frictionless)")
-    present = set(np.unique(status).astype(int).tolist())
-    handles = [Patch(facecolor=c, edgecolor="0.4", lw=0.5, label=n)
-               for i, (c, n) in enumerate(zip(STATUS_COLOURS, names)) if i in present or i == 0]
-    ax.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2),
-              ncol=len(handles), frameon=False, handlelength=1.0, columnspacing=0.8)
+    if mu != 0:
+        colours, bounds, ticks = STATUS_COLOURS, [-0.5, 0.5, 1.5, 2.5], [0, 1, 2]
+        names = ("separated", "stick", "slip")
+    else:                                  # frictionless: every contact cell slips
+        colours, bounds, ticks = STATUS_COLOURS[::2], [-0.5, 0.5, 2.5], [0, 1.5]
+        names = ("separated", "contact")
+    cmap = ListedColormap(colours)
+    im = ax.imshow(status.T, origin="lower", extent=extent, cmap=cmap,
+                   norm=BoundaryNorm(bounds, cmap.N), interpolation="nearest")
+    bar = fig.colorbar(im, ax=ax, **COLORBAR_BELOW, ticks=ticks)
+    bar.ax.set_xticklabels(names, fontsize=8)
+    bar.ax.tick_params(length=0)
     ax.set_title("status", fontsize=9)
 
 
 def plot_maps(ds, instant=-1, *, fig=None):
-    """Maps of p, |q| and the contact status at one instant, axes in mm.
+    """Maps of p, |q| and the contact status at one instant, axes in mm, side by side
+    (each colour bar under its map, so that the maps take the figure's width).
 
     Parameters
     ----------
@@ -501,20 +506,20 @@ def plot_maps(ds, instant=-1, *, fig=None):
         x1, x2, d1, d2 = grid_of(ds)
         extent = [(x1[0] - d1 / 2) * 1e3, (x1[-1] + d1 / 2) * 1e3,
                   (x2[0] - d2 / 2) * 1e3, (x2[-1] + d2 / 2) * 1e3]
-        fig, axes = _grid_axes(fig, 1, 3)
+        fig, axes = _grid_axes(fig, 1, 3, sharey=True)
         p = np.asarray(ds["p"].isel(time=k).values, float)
         f, unit = _prefixed(float(p.max()))
         im = axes[0, 0].imshow(p.T / f, origin="lower", extent=extent, cmap="viridis",
                                interpolation="nearest")
-        fig.colorbar(im, ax=axes[0, 0], fraction=0.046, pad=0.04, label=f"p [{unit}]")
+        fig.colorbar(im, ax=axes[0, 0], **COLORBAR_BELOW, label=f"p [{unit}]")
         axes[0, 0].set_title("pressure p", fontsize=9)
         _map_shear(fig, axes[0, 1], ds, k, extent, float(p.max()))
-        _map_status(axes[0, 2], ds, k, extent)
+        _map_status(fig, axes[0, 2], ds, k, extent)
         for a in axes[0]:
-            a.set_xlabel("x1 [mm]")
             a.set_aspect("equal")
             a.tick_params(labelsize=7)
-        axes[0, 0].set_ylabel("x2 [mm]")
+            a.set_xlabel("x1 [mm]", fontsize=8, labelpad=1)
+        axes[0, 0].set_ylabel("x2 [mm]", fontsize=8)
         t = float(ds["time"].values[k])
         fig.suptitle(f"{_scene_title(ds)} at t = {t:.4g} s ({_time_label(ds, k)})",
                      fontsize=10)
@@ -531,7 +536,7 @@ def _require_frictional(ds, what):
 
 
 def plot_hysteresis(ds, *, ax=None):
-    """The fretting loop: T1 [N] against omega1 [um], closed form in grey (MD).
+    """The fretting loop: T1 [N] against omega1 [um], the closed form (MD) dashed on top.
 
     Parameters
     ----------
@@ -556,7 +561,7 @@ def plot_hysteresis(ds, *, ax=None):
         sol = _solution(ds)
         loop = sol.loop() if sol is not None else None
         if loop is not None:
-            ax.plot(loop[1] * 1e6, loop[0], "-", color=GREY_WIDE, lw=4.0, zorder=0,
+            ax.plot(loop[1] * 1e6, loop[0], **CLOSED_STYLE,
                     label="closed form (Mindlin-Deresiewicz)")
         ax.plot(om * 1e6, T, "o-", ms=3, lw=1.2, color="C0", label="numerical")
         ax.set_xlabel("omega1 [µm]")
@@ -574,7 +579,7 @@ def plot_hysteresis(ds, *, ax=None):
 
 def plot_radii(ds, *, ax=None):
     """Contact radius sqrt(A/pi) and stick radius sqrt(A_stick/pi) [mm] against time [s],
-    closed forms in grey where they apply.
+    closed forms dashed on top where they apply.
 
     Parameters
     ----------
@@ -597,12 +602,10 @@ def plot_radii(ds, *, ax=None):
         sol = _solution(ds)
         if sol is not None:
             n = t.size
-            ax.plot(t, [sol.contact_radius(k) * 1e3 for k in range(n)], "-",
-                    color=GREY_WIDE, lw=4.0, zorder=0,
+            ax.plot(t, [sol.contact_radius(k) * 1e3 for k in range(n)], **CLOSED_STYLE,
                     label=f"closed form ({sol.name.replace('_', '-')})")
             if sol.name == "mindlin_deresiewicz":
-                ax.plot(t, [sol.stick_radius(k) * 1e3 for k in range(n)], "-",
-                        color=GREY_WIDE, lw=4.0, zorder=0)
+                ax.plot(t, [sol.stick_radius(k) * 1e3 for k in range(n)], **CLOSED_STYLE)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("radius [mm]")
         ax.set_ylim(bottom=0.0)
@@ -639,12 +642,23 @@ def _value_text(v):
     return str(v)
 
 
+#: SI units shown in a unit of the contact's size: (factor to multiply by, label).
+DISPLAY_UNITS = {"m2": (1e6, "mm²"), "m": (1e6, "µm"), "J": (1e6, "µJ"),
+                 "Pa": (1e-6, "MPa"), "N m": (1e3, "N mm")}
+
+
+def _display_unit(units):
+    """(factor, label) to show values in ``units`` (SI) at the contact's scale."""
+    return DISPLAY_UNITS.get(units, (1.0, "" if units in ("", "1") else units))
+
+
 def _axis_labels(ax, sw, variable, xname, reduced):
     known = VARIABLES.get(variable, {})
     units = sw[variable].attrs.get("units", known.get("units", ""))
     long = sw[variable].attrs.get("long_name", known.get("long_name", variable))
-    ylab = f"{'max ' if reduced else ''}{variable}" + (f" ({long})" if long != variable else "") \
-        + (f" [{units}]" if units and units != "1" else "")
+    unit = _display_unit(units)[1]
+    ylab = f"{'max over x1, x2 of ' if reduced else ''}{long}" \
+        + (f" [{unit}]" if unit else "")
     ax.set_ylabel(ylab, fontsize=9)
     xunits = sw[xname].attrs.get("units", "") if xname in sw.variables else ""
     if xname == "t_norm":
@@ -664,6 +678,8 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
         looped over (all their combinations).
     variable : str
         A series (over time). A field is reduced to its largest value over x1, x2.
+        Shown at the contact's scale (:data:`DISPLAY_UNITS`: an area in mm², a length in
+        µm, an energy in µJ, a stress in MPa), labelled by its long name and unit.
     x : str
         The abscissa; ``"time"`` uses ``t_norm`` when the sweep has it (members with
         different windows are aligned on it).
@@ -692,6 +708,8 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
         if xname not in sw.coords and xname not in sw.dims and xname not in sw:
             raise ArchiveError(f"x = {x!r} is not a coordinate of the sweep")
         extra = [d for d in da.dims if d not in BASE_DIMS]
+        factor = _display_unit(sw[variable].attrs.get(
+            "units", VARIABLES.get(variable, {}).get("units", "")))[0]
         fig, ax = axes_of(ax)
         combos = list(itertools.product(*[range(da.sizes[d]) for d in extra])) \
             if extra else [()]
@@ -702,13 +720,14 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
             xv = y[xname] if xs_all is None else \
                 xs_all.isel({d: i for d, i in sel.items() if d in xs_all.dims})
             xv = np.asarray(xv.values, float).ravel()
-            yv = np.asarray(y.values, float).ravel()
+            yv = np.asarray(y.values, float).ravel() * factor
             if xv.size != yv.size:
                 raise ArchiveError(f"x = {xname!r} does not run along {variable!r} "
                                    f"({xv.size} values against {yv.size})")
             ax.plot(xv, yv, "-", marker="o" if yv.size <= 30 else None, ms=3, lw=1.2,
                     color=f"C{n % 10}", label=_member_label(sw, sel))
         _axis_labels(ax, sw, variable, xname, reduced)
+        ax.ticklabel_format(axis="y", useOffset=False)
         ax.grid(True, lw=0.3, alpha=0.5)
         if len(combos) <= MAX_LEGEND:
             ax.legend(fontsize=7, ncol=1 if len(combos) <= 8 else 2)

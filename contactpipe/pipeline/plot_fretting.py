@@ -29,6 +29,8 @@ __all__ = ["plot_fretting_map", "plot_energy_ratio", "MARKERS", "map_axis"]
 MARKERS = {"partial slip": ("o", "#2c7bb6"), "mixed": ("s", "#fdae61"),
            "gross slip": ("^", "#d7191c")}
 AXES = {"mu": ("mu", "friction coefficient μ"), "W": ("W", "normal force W [N]")}
+#: The sweep axis that makes each ordinate vary.
+SWEPT = {"mu": "friction.mu", "W": "load.normal_force"}
 
 
 def _table(obj):
@@ -50,6 +52,14 @@ def map_axis(table, against=None) -> str:
     if against is not None:
         if against not in AXES:
             raise ValueError(f"against must be 'mu' or 'W', got {against!r}")
+        values = np.unique(np.asarray(table[against].values, float))
+        if values.size < 2:
+            other = "W" if against == "mu" else "mu"
+            raise ArchiveError(
+                f"against = {against!r}: every member has {against} = "
+                f"{', '.join(f'{v:g}' for v in values) or 'nothing'}, one value: a map "
+                f"against {against} needs members that differ in it (sweep "
+                f"{SWEPT[against]}), or against = {other!r}")
         return against
     varies = {k: np.unique(np.asarray(table[k].values, float)).size > 1 for k in AXES}
     return "W" if varies["W"] and not varies["mu"] else "mu"
@@ -101,7 +111,8 @@ def plot_fretting_map(sweep, against=None, *, ax=None):
     Raises
     ------
     ArchiveError
-        Not a sweep folder or a regime table; a member that is not a fretting loop.
+        Not a sweep folder or a regime table; a member that is not a fretting loop;
+        ``against`` names a load that has one value over the members.
     """
     table = _table(sweep)
     y_name = map_axis(table, against)

@@ -1,8 +1,9 @@
 """Figures of a subsurface stress field or a fatigue criterion (matplotlib, no pyplot).
 
 - :func:`plot_stress_section`: a field on the x1-x3 plane through the centre (x2 nearest
-  0: the mean of the two middle rows of an even grid), depth downwards, its largest value
-  marked.
+  0: the mean of the two middle rows of an even grid), depth downwards from the
+  shallowest depth computed (the surface at the top), interpolated between the depths,
+  its largest value marked.
 - :func:`plot_stress_surface`: the same field on the x1-x2 plane at one depth (the
   shallowest by default).
 - :func:`plot_stress`: both side by side (the ``stress`` kind of ``contactpipe plot``).
@@ -12,7 +13,8 @@ x1, x2; one instant is drawn, the last by default), from :func:`contactpipe.fati
 (field over x3, x1, x2), or a stress file of ``contactpipe stress`` or of the pipeline's
 ``[stress]`` product (stresses and, when a criterion was asked for, its fields). The
 default field is the criterion's main one (attribute ``criterion_field``) when there is
-one, else von Mises. Axes in mm, stresses in MPa (dimensionless indices as they are).
+one, else von Mises. Axes in mm, stresses in MPa (dimensionless indices as they are);
+the colour bars name the field in mathtext (:data:`MATH_LABELS`).
 
 The conventions of :mod:`contactpipe.pipeline.plot`, which draws these as its ``stress``
 kind: every function takes ``ax=None`` / ``fig=None`` and returns the Figure; a new figure
@@ -28,6 +30,28 @@ from .inputs import centre_rows
 __all__ = ["plot_stress_section", "plot_stress_surface", "plot_stress", "default_field"]
 
 MM = 1e3
+#: Rows of the x1-x3 section, linear in depth between the sampled depths.
+DEPTH_ROWS = 240
+#: Colour-bar labels of the stress and criterion fields, in matplotlib's mathtext (the
+#: files keep their plain-text long names); a field not listed shows its long name.
+MATH_LABELS = {
+    "s11": r"$\sigma_{11}$", "s22": r"$\sigma_{22}$", "s33": r"$\sigma_{33}$",
+    "s12": r"$\sigma_{12}$", "s13": r"$\sigma_{13}$", "s23": r"$\sigma_{23}$",
+    "von_mises": r"von Mises stress $\sigma_\mathrm{vM}$",
+    "equivalent_amplitude": r"equivalent amplitude $\sqrt{3J_{2,a}}$",
+    "hydrostatic_mean": r"mean hydrostatic stress $\sigma_{h,\mathrm{mean}}$",
+    "hydrostatic_max": r"largest hydrostatic stress $\sigma_{h,\max}$",
+    "crossland_index":
+        r"Crossland index $(\sqrt{J_{2,a}} + \alpha\,\sigma_{h,\max})/t_{-1}$",
+    "crossland_stress": r"Crossland stress $\sqrt{J_{2,a}} + \alpha\,\sigma_{h,\max}$",
+    "sqrt_j2_amplitude": r"shear amplitude $\sqrt{J_{2,a}}$",
+    "dang_van_index": r"Dang Van index $\max_t(\tau + a\,\sigma_h)/t_{-1}$",
+    "dang_van_stress": r"Dang Van stress $\max_t(\tau + a\,\sigma_h)$",
+    "mesoscopic_shear": r"mesoscopic shear $\tau$ at the critical instant",
+    "hydrostatic": r"hydrostatic stress $\sigma_h$ at the critical instant",
+    "swt": r"SWT parameter $\sigma_{n,\max}\,\varepsilon_a$",
+    "swt_stress": r"SWT stress $\sqrt{E\,\sigma_{n,\max}\,\varepsilon_a}$",
+}
 
 
 def _new_axes(ax, fig, ncols=1):
@@ -71,7 +95,8 @@ def _field(data, field, time):
                          "(after the instant is chosen)")
     unit = da.attrs.get("units", "")
     scale, shown = (1e-6, "MPa") if unit == "Pa" else (1.0, unit)
-    label = f"{da.attrs.get('long_name', field)} [{shown}]"
+    label = MATH_LABELS.get(field, da.attrs.get("long_name", field)) \
+        + (f" [{shown}]" if shown and shown != "1" else "")
     return da, field, label, scale, title
 
 
@@ -100,8 +125,15 @@ def plot_stress_section(data, field=None, time=None, ax=None):
     x1 = da["x1"].values * MM
     x3 = da["x3"].values * MM
     if len(x3) > 1:
-        mesh = ax.pcolormesh(x1, x3, sec, shading="nearest", cmap="viridis")
-        ax.invert_yaxis()
+        # linear between the sampled depths: the plane runs from the shallowest depth
+        # (the surface, x3 = 0, at the top) to the deepest, no block above the surface
+        fine = np.linspace(x3[0], x3[-1], DEPTH_ROWS)
+        j = np.clip(np.searchsorted(x3, fine, side="right") - 1, 0, len(x3) - 2)
+        w = ((fine - x3[j]) / (x3[j + 1] - x3[j]))[:, None]
+        half = 0.5 * (x1[1] - x1[0]) if len(x1) > 1 else 0.5
+        mesh = ax.imshow((1.0 - w) * sec[j] + w * sec[j + 1], origin="upper",
+                         extent=(x1[0] - half, x1[-1] + half, x3[-1], x3[0]),
+                         aspect="auto", interpolation="nearest", cmap="viridis")
     else:
         mesh = None
         ax.plot(x1, sec[0])
@@ -109,7 +141,7 @@ def plot_stress_section(data, field=None, time=None, ax=None):
     if mesh is not None:
         fig.colorbar(mesh, ax=ax, label=label)
         ax.plot(x1[k1], x3[k3], "w+", ms=12, mew=2)
-        ax.set_ylabel("x3, depth [mm]")
+        ax.set_ylabel("depth x3 [mm]")
     else:
         ax.set_ylabel(label)
     ax.set_xlabel("x1 [mm]")
