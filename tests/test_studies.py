@@ -140,12 +140,15 @@ def test_fretting_map_quick(tmp_path):
 # --------------------------------------------------------------------------- full size
 @pytest.mark.slow
 def test_fig2_full(tmp_path):
-    """128 x 128 over 3 a_H, 40 steps: measured traction 0.43 % of mu p0 (kink cells out;
-    plain 4.6 %, RMS 0.65 %), stick radius 0.20 cells, loop and energy 2e-5."""
+    """128 x 128 over 3 a_H, 40 steps: measured traction 0.43 % of mu p0 along x1 through
+    the centre (kink cells out; plain 4.6 %, RMS 0.65 %); as contactpipe compare measures
+    it (every cell), 7.0 %, away from the stick/slip circles and the edge 1.4 %; stick
+    radius 0.20 cells, loop and energy 2e-5."""
     out = fig2_elastic_fretting.main(["--out", str(tmp_path)])
     assert_png(out["png"])
     s = out["summary"]
     assert s["md_traction"] < 0.02 and s["md_stick_cells"] < 2
+    assert s["compare_err_q1_max"] < 0.10 and s["compare_err_q1_max_interior"] < 0.02
     assert s["md_loop"] < 0.02 and s["md_energy"] < 0.02
     assert s["hertz_p0"] < 0.01
 

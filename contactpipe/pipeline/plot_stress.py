@@ -45,8 +45,8 @@ MATH_LABELS = {
         r"Crossland index $(\sqrt{J_{2,a}} + \alpha\,\sigma_{h,\max})/t_{-1}$",
     "crossland_stress": r"Crossland stress $\sqrt{J_{2,a}} + \alpha\,\sigma_{h,\max}$",
     "sqrt_j2_amplitude": r"shear amplitude $\sqrt{J_{2,a}}$",
-    "dang_van_index": r"Dang Van index $\max_t(\tau + a\,\sigma_h)/t_{-1}$",
-    "dang_van_stress": r"Dang Van stress $\max_t(\tau + a\,\sigma_h)$",
+    "dang_van_index": r"Dang Van index $\mathrm{max}_t(\tau + a\,\sigma_h)/t_{-1}$",
+    "dang_van_stress": r"Dang Van stress $\mathrm{max}_t(\tau + a\,\sigma_h)$",
     "mesoscopic_shear": r"mesoscopic shear $\tau$ at the critical instant",
     "hydrostatic": r"hydrostatic stress $\sigma_h$ at the critical instant",
     "swt": r"SWT parameter $\sigma_{n,\max}\,\varepsilon_a$",
@@ -140,7 +140,10 @@ def plot_stress_section(data, field=None, time=None, ax=None):
     k3, k1 = np.unravel_index(int(np.nanargmax(sec)), sec.shape)
     if mesh is not None:
         fig.colorbar(mesh, ax=ax, label=label)
-        ax.plot(x1[k1], x3[k3], "w+", ms=12, mew=2)
+        from matplotlib.patheffects import withStroke     # heavy: only when drawing
+        # outlined and not clipped: whole, and seen on white, when it lies at x3 = 0
+        ax.plot(x1[k1], x3[k3], "w+", ms=12, mew=2, clip_on=False,
+                path_effects=[withStroke(linewidth=4, foreground="k")])
         ax.set_ylabel("depth x3 [mm]")
     else:
         ax.set_ylabel(label)
@@ -181,7 +184,10 @@ def plot_stress(data, field=None, time=None, fig=None):
     Returns the Figure (a new one unless ``fig`` is given).
     """
     fig, axes = _new_axes(None, fig, ncols=2)
-    plot_stress_section(data, field, time, ax=axes[0])
+    from matplotlib.layout_engine import TightLayoutEngine    # heavy: only when drawing
+    if isinstance(fig.get_layout_engine(), TightLayoutEngine):
+        fig.get_layout_engine().set(w_pad=4.0)   # the section's colour-bar label clear of
+    plot_stress_section(data, field, time, ax=axes[0])         # the map's x2 label
     plot_stress_surface(data, field, None, time, ax=axes[1])
     return fig
 
