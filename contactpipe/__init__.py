@@ -13,22 +13,61 @@ coefficients by DC-FFT. Every simulation returns a labelled :class:`xarray.Datas
 
 All quantities are SI (m, s, N, Pa, J); see docs/conventions.md for signs.
 """
-from ._version import __version__
+from __future__ import annotations
 
+import importlib
+import sys
+import types
+
+from ._version import __version__
 from .exceptions import (ArchiveError, ContactpipeError, ConvergenceError, GridError,
                          GrossSlidingError, SceneError)
-from .scene import Scene
-from .planning import Plan, plan
-from .simulation import simulate
-from .archive import open_archive, save
-from .stress import subsurface_stress
-from .fatigue import fatigue
-# the pipeline stages: bound after their modules so the names are the functions
-from .pipeline.compare import compare
-from .pipeline.sweep import open_sweep, sweep
+
+#: Public names and the modules that define them, imported on first use (module
+#: ``__getattr__``): ``import contactpipe`` stays light (no xarray, dask, scipy, pyfftw),
+#: so that the command line refuses a bad scene in a fraction of a second.
+_LAZY = {
+    "Scene": "scene", "Plan": "planning", "plan": "planning", "simulate": "simulation",
+    "open_archive": "archive", "save": "archive", "subsurface_stress": "stress",
+    "fatigue": "fatigue", "compare": "pipeline.compare", "open_sweep": "pipeline.sweep",
+    "sweep": "pipeline.sweep",
+}
 
 __all__ = [
     "__version__", "Scene", "simulate", "save", "open_archive", "plan", "Plan",
     "SceneError", "ConvergenceError", "GrossSlidingError", "GridError", "ArchiveError",
     "ContactpipeError", "sweep", "open_sweep", "compare", "subsurface_stress", "fatigue",
 ]
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is not None:
+        value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    else:
+        try:                             # a subpackage or module: cp.analytic, cp.accuracy
+            value = importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as err:
+            if err.name != f"{__name__}.{name}":
+                raise
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
+
+class _Package(types.ModuleType):
+    """The package: ``contactpipe.fatigue`` stays the function :func:`fatigue` when the
+    module of the same name is imported (the import system binds a submodule to its
+    parent's attribute; here that binding is kept off the public name)."""
+
+    def __setattr__(self, name, value):
+        if name in _LAZY and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package

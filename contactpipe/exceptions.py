@@ -50,3 +50,7 @@ def one_line(err: BaseException, with_type: bool = True) -> str:
     if not text:
         return type(err).__name__
     return f"{type(err).__name__}: {text}" if with_type else text
+
+
+class ResumeNotice(UserWarning):
+    """Where a resumable run starts: the instant of its checkpoint, or the first one."""

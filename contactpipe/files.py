@@ -39,8 +39,8 @@ from .exceptions import ContactpipeError, OutputPathError, SceneError
 
 __all__ = ["atomic_path", "write_text", "write_json", "exclusive_lock", "LockedError",
            "read_toml", "loads_toml", "TOMLDecodeError", "check_output_path",
-           "check_output_dir", "temp_name",
-           "temporaries", "publish", "utc_now"]
+           "check_output_dir", "same_file", "temp_name",
+           "temporaries", "publish", "utc_now", "make_folder"]
 
 TOMLDecodeError = tomllib.TOMLDecodeError
 #: Suffix of every temporary file of an atomic write (a killed process may leave one).
@@ -160,6 +160,27 @@ def atomic_path(target, keep_suffix: bool = False):
         raise
 
 
+def make_folder(folder) -> pathlib.Path:
+    """Create ``folder`` and its missing parents (``mkdir -p``) one level at a time, so
+    that no depth of missing folders makes a RecursionError (pathlib's and os's
+    ``parents=True`` recurse once per level)."""
+    folder = pathlib.Path(folder)
+    missing = []
+    probe = folder
+    while not probe.is_dir():
+        missing.append(probe)
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    for level in reversed(missing):
+        try:
+            os.mkdir(level)
+        except FileExistsError:
+            if not level.is_dir():
+                raise
+    return folder
+
+
 def write_text(target, text: str) -> pathlib.Path:
     """Write ``text`` (UTF-8) to ``target`` atomically."""
     with atomic_path(target) as tmp:
@@ -223,6 +244,13 @@ _TOO_DEEP = ("arrays or tables nested too deep to read (hundreds of levels); a s
              "sweep or pipeline file needs a few")
 
 
+def _too_long(err: ValueError) -> str:
+    """Why Python refused to read a value (an integer longer than its digit limit)."""
+    text = " ".join(str(err).split(";")[0].split())
+    return (f"a value cannot be read ({text}); a scene, sweep or pipeline file needs "
+            "numbers of a few digits")
+
+
 def loads_toml(text: str, source: str = "the text") -> dict:
     """TOML text as a dict; :class:`SceneError` naming ``source`` if it is not TOML
     (a value nested too deep for the parser included: one line, not a RecursionError)."""
@@ -232,6 +260,8 @@ def loads_toml(text: str, source: str = "the text") -> dict:
         raise SceneError(f"{source} is not valid TOML: {err}") from None
     except RecursionError:
         raise SceneError(f"{source} is not valid TOML: {_TOO_DEEP}") from None
+    except ValueError as err:            # an integer of thousands of digits
+        raise SceneError(f"{source} is not valid TOML: {_too_long(err)}") from None
 
 
 def read_toml(path, what: str = "") -> dict:
@@ -260,16 +290,38 @@ def read_toml(path, what: str = "") -> dict:
         raise SceneError(f"{path} is not a valid TOML{kind} file: {err}") from None
     except RecursionError:
         raise SceneError(f"{path} is not a valid TOML{kind} file: {_TOO_DEEP}") from None
+    except ValueError as err:            # an integer of thousands of digits
+        raise SceneError(f"{path} is not a valid TOML{kind} file: {_too_long(err)}") \
+            from None
 
 
 # ----------------------------------------------------------------------------- checks
 
-def check_output_path(path, what: str = "output", inputs=()) -> pathlib.Path:
+def same_file(a, b) -> bool:
+    """``a`` and ``b`` name one file: the same resolved real path (symbolic links and
+    ``..`` followed, whether the file exists yet or not), or the same existing file
+    (a hard link)."""
+    if a is None or b is None:
+        return False
+    try:
+        if os.path.realpath(os.fspath(a)) == os.path.realpath(os.fspath(b)):
+            return True
+    except (OSError, ValueError, RuntimeError):     # a link loop: compared below
+        pass
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
+
+
+def check_output_path(path, what: str = "output", inputs=(), others=()) -> pathlib.Path:
     """Refuse an output path before any work is done; return it as a Path.
 
     Refused: an empty path; an existing directory; anything that is not a regular file
     (a device such as ``/dev/null``, a FIFO, a socket); one of ``inputs`` (the file would
-    overwrite what it is computed from); a path whose folder exists as a file.
+    overwrite what it is computed from); one of ``others``, the ``(what, path)`` pairs
+    of the other outputs of the same command; a path whose folder exists as a file.
+    Files are compared by their resolved real paths (and, existing, by identity).
 
     Raises
     ------
@@ -279,6 +331,14 @@ def check_output_path(path, what: str = "output", inputs=()) -> pathlib.Path:
     if path is None or not os.fspath(path):
         raise OutputPathError(f"{what} path is empty: give a file name such as run.nc")
     path = pathlib.Path(os.fspath(path)).expanduser()
+    for inp in inputs:
+        if same_file(path, pathlib.Path(os.fspath(inp)).expanduser() if inp else None):
+            raise OutputPathError(f"{what} {path} is the input file {inp}: writing "
+                                  f"it would destroy the input; give another name")
+    for other_what, other in others:
+        if same_file(path, pathlib.Path(os.fspath(other)).expanduser() if other else None):
+            raise OutputPathError(f"{what} {path} is also the {other_what}: each output "
+                                  f"needs its own file; give another name")
     try:
         st = os.stat(path)
     except FileNotFoundError:
@@ -293,13 +353,6 @@ def check_output_path(path, what: str = "output", inputs=()) -> pathlib.Path:
             raise OutputPathError(f"{what} {path} is not a regular file (a device, FIFO or "
                                   f"socket): contactpipe writes a file atomically and would "
                                   f"replace it; give a file name")
-        for inp in inputs:
-            if inp is None:
-                continue
-            with contextlib.suppress(OSError):
-                if os.path.samefile(path, inp):
-                    raise OutputPathError(f"{what} {path} is the input file {inp}: writing "
-                                          f"it would destroy the input; give another name")
     parent = path.parent if str(path.parent) else pathlib.Path(".")
     if parent.exists() and not parent.is_dir():
         raise OutputPathError(f"{what} {path}: its folder {parent} is a file, not a "

@@ -124,7 +124,14 @@ def plan(scene, tangential=None, coupling=None) -> Plan:
     twist = load.moment3 is not None or load.rotation3 is not None
     has_T = bool(np.any(tang != 0)) or twist
     has_T2 = bool(np.any(tang[1] != 0)) or twist
-    couples = pair_couples(b1, b2)
+    try:
+        couples = pair_couples(b1, b2)
+    except (ZeroDivisionError, OverflowError):   # a modulus that rounds to 0 or inf
+        moduli = ", ".join(f"{side}.young = {getattr(scene, side).young!r}"
+                           for side in ("indenter", "halfspace")
+                           if getattr(getattr(scene, side), "young", None) is not None)
+        raise SceneError(f"{moduli}: a shear modulus rounds to 0 Pa or overflows; give "
+                         "moduli of a material (1e3 to 1e13 Pa)") from None
     needs_tangential = mu > 0 and (has_T or couples)
 
     choice = tangential or scene.solver.tangential

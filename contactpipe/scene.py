@@ -604,6 +604,15 @@ class Scene:
         text = json.dumps(d, sort_keys=True, separators=(",", ":"), allow_nan=False)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
+    def input_files(self) -> list:
+        """The files the scene reads, as absolute paths: a surface's gap file, a body's
+        fitted material table, a friction map (what no output may overwrite)."""
+        files = [getattr(part, "file", None)
+                 for part in (self.geometry, self.indenter, self.halfspace)]
+        if self.friction.mapped:
+            files.append(self.friction.mu)
+        return [f for f in files if f]
+
     def replace(self, changes) -> "Scene":
         """A new, validated scene with some values changed.
 

@@ -43,6 +43,9 @@ FFT_BACKENDS = ("auto", "pyfftw", "scipy")
 ACCURACIES = ("fast", "balanced", "accurate")
 PRECISIONS = ("float64", "float32")
 MIN_POINTS, MAX_POINTS = 8, 4096
+#: Side lengths a grid may have [m]: a nanometre to a kilometre. Far outside, a cell's
+#: area underflows to 0 or its inverse square overflows, and no contact lives there.
+MIN_SIDE, MAX_SIDE = 1e-9, 1e3
 MAX_TOLERANCE = 1e-2
 #: Caps on counts, against absurd sizes (each far beyond a practical simulation).
 MAX_CYCLES = 100_000
@@ -725,9 +728,10 @@ class Grid(Part):
         Field("points", "integers", f"two integers [N1, N2], each from {MIN_POINTS} to "
                                     f"{MAX_POINTS}",
               ok=lambda n: MIN_POINTS <= n <= MAX_POINTS, length=2, required=True),
-        Field("size", "numbers", "two finite numbers > 0 [m], [L1, L2] the full side "
-                                 "lengths, or 'auto'",
-              ok=_positive, length=2, options=("auto",), required=True, unit="m"),
+        Field("size", "numbers", f"two numbers from {MIN_SIDE:g} to {MAX_SIDE:g} [m], "
+                                 "[L1, L2] the full side lengths, or 'auto'",
+              ok=lambda x: MIN_SIDE <= x <= MAX_SIDE, length=2, options=("auto",),
+              required=True, unit="m"),
     )
 
     def _size(self):

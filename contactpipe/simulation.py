@@ -35,8 +35,8 @@ from .accuracy import (PRELOAD_TARGET, PRESETS, choose_preload, knot_multiple,
                        preload_fractions, resolve_accuracy)
 from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
 from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
-                         OutputPathError, SceneError, one_line)
-from .files import LockedError, check_output_path, exclusive_lock
+                         OutputPathError, ResumeNotice, SceneError, one_line)
+from .files import LockedError, check_output_path, exclusive_lock, make_folder
 from .interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
 from .materials import FIT_TOLERANCE, dundurs_beta
 from .nomenclature import variables_for
@@ -70,10 +70,6 @@ class ResumeLockedError(LockedError):
 
 class ResumeWarning(UserWarning):
     """The resume state of a target was damaged or unusable: the run starts afresh."""
-
-
-class ResumeNotice(UserWarning):
-    """Where a resumable run starts: the instant of its checkpoint, or the first one."""
 
 
 def grid_coordinates(scene):
@@ -846,7 +842,7 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         if path is None:
             return _march(_Problem(scene, pl, fft, threads), None, None, *opts)
         try:
-            path.parent.mkdir(parents=True, exist_ok=True)
+            make_folder(path.parent)
         except OSError as e:
             raise OutputPathError(f"archive {path}: cannot create its folder "
                                   f"({e.strerror or one_line(e)})") from None

@@ -240,8 +240,8 @@ MISTAKES = [
      r"grid\.points must be .*got \[24\.0, 24\.5\]"),
     ("grid points a scalar", {"grid.points": 24}, r"grid\.points must be .*got 24"),
     ("grid size <= 0", {"grid.size": [2e-3, 0.0]},
-     r"grid\.size must be two finite numbers > 0 \[m\], \[L1, L2\] the full side lengths, "
-     r"or 'auto', got \[0\.002, 0\.0\]"),
+     r"grid\.size must be two numbers from 1e-09 to 1000 \[m\], \[L1, L2\] the full side "
+     r"lengths, or 'auto', got \[0\.002, 0\.0\]"),
     ("grid size a word", {"grid.size": "big"}, r"grid\.size must be .*got 'big'"),
     ("time steps < 1", {"time.steps": 0}, r"time\.steps must be an integer >= 1, got 0"),
     ("time steps negative", {"time.steps": -3}, r"time\.steps must be an integer >= 1"),

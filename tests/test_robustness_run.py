@@ -333,6 +333,7 @@ def test_the_estimate_bounds_a_measured_peak(tmp_path):
     the resident high-water mark (VmHWM) after resetting it (/proc/self/clear_refs), so
     the imports' own peak does not count."""
     code = ("import re, contactpipe as cp\n"
+            "import contactpipe.simulation  # import contactpipe is lazy: load it first\n"
             "from contactpipe.testing import TINY_SCENES\n"
             "from contactpipe.planning import estimate_resources\n"
             "sc = cp.Scene.from_toml_text(TINY_SCENES['fretting']).replace("

@@ -4,11 +4,13 @@ Exit status 0 on success; otherwise one line on stderr (no traceback; ``--debug`
 it) and:
 
 * 2 - bad input: a scene, sweep or pipeline file, an argument, an output path (empty, a
-  directory, a device, an input file), an input archive that is missing, unreadable or
-  damaged (:class:`~contactpipe.exceptions.ArchiveError`), a run that would not fit in the
-  memory available; nothing is written;
-* 1 - a run that failed: no convergence, contact off the grid, out of memory, an archive
-  that could not be written, a member that failed;
+  directory, a device, an input file or a file the scene reads, another output of the
+  same command), an input archive or stress file that is missing, unreadable or damaged
+  (:class:`~contactpipe.exceptions.ArchiveError`), a run that would not fit in the memory
+  available; nothing is written;
+* 1 - a run that failed: no convergence, contact off the grid, out of memory, an output
+  that could not be written (a read-only folder, a full disk: every command alike), a
+  member that failed;
 * 3 - another process holds the lock (a resumable run of the same target, a sweep or a
   pipeline run on the same folder); nothing is touched;
 * 130 - interrupted by Ctrl-C (SIGINT); 143 - terminated by SIGTERM; 129 - by SIGHUP
@@ -20,7 +22,8 @@ it) and:
 Warnings are printed as one line each (``contactpipe: warning: ...``).
 
 Each stage module provides ``add_arguments(parser)`` and ``main(args) -> int``; this file
-only wires them together.
+only wires them together, importing only the stage that runs: ``run`` of a refused scene
+loads numpy, tomllib and the scene modules, not xarray, dask, matplotlib nor the FFTs.
 """
 from __future__ import annotations
 
@@ -34,12 +37,10 @@ import sys
 import warnings
 
 from .._version import __version__
-from ..exceptions import (ArchiveError, ContactpipeError, OutputPathError, SceneError,
-                          one_line)
-from ..files import LockedError, check_output_path
-from ..scene import Scene
-from ..interrupts import deferred, pending, raise_if_signalled
-from ..simulation import ResumeNotice, signals_as_interrupt, simulate
+from ..exceptions import (ArchiveError, ContactpipeError, OutputPathError, ResumeNotice,
+                          SceneError, one_line)
+from ..files import LockedError, check_output_path, make_folder
+from ..interrupts import deferred, pending, raise_if_signalled, signals_as_interrupt
 
 __all__ = ["main", "build_parser"]
 
@@ -76,16 +77,16 @@ def _add_run(sub):
 
 
 def _run(args) -> int:
+    from ..scene import Scene            # light: numpy, tomllib and the scene modules
     scene = Scene.from_toml(args.scene)
-    inputs = [args.scene, getattr(scene.geometry, "file", None)]
+    inputs = [args.scene, *scene.input_files()]
     output = check_output_path(args.output, "archive (-o)", inputs=inputs)
     figure = None
     if args.figure is not None:
-        figure = check_output_path(args.figure, "figure (--figure)", inputs=inputs)
-        if figure.resolve() == output.resolve():
-            raise OutputPathError(f"figure (--figure) {figure} is also the archive (-o): "
-                                  f"give the figure its own name, e.g. {output.stem}.png")
+        figure = check_output_path(args.figure, "figure (--figure)", inputs=inputs,
+                                   others=[("archive (-o)", output)])
     tangential = None if args.tangential in (None, "auto") else args.tangential
+    from ..simulation import simulate    # heavy (xarray, dask, FFT): after the checks
     try:
         ds = simulate(scene, output, progress=not args.no_progress, tangential=tangential,
                       fft=args.fft, threads=args.threads, resume=args.resume)
@@ -99,13 +100,24 @@ def _run(args) -> int:
     if figure is not None:
         raise_if_signalled()             # a signal came after the archive: no figure
         from .plot import plot_profiles, save_figure  # matplotlib: only when a figure is asked
-        figure.parent.mkdir(parents=True, exist_ok=True)
+        make_folder(figure.parent)
         save_figure(plot_profiles(ds), figure)
         print(f"wrote {figure}")
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command(argv) -> str | None:
+    """The sub-command named in ``argv`` (its first word that is not an option)."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word
+    return None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The whole command line; with ``command``, only that stage's module is imported
+    (the others get their one-line help): each stage module imports what it draws or
+    computes with (xarray, dask, matplotlib), which a refused scene never needs."""
     parser = argparse.ArgumentParser(
         prog="contactpipe",
         description="Frictional stick-slip contact of elastic and viscoelastic bodies.")
@@ -114,6 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_run(sub)
     for name, (module, helptext) in STAGES.items():
+        if command is not None and name != command:
+            sub.add_parser(name, help=helptext, description=helptext)
+            continue
         try:
             mod = importlib.import_module(module)
         except ImportError:
@@ -147,7 +162,8 @@ def _error(err, code: int, with_type: bool = False) -> int:
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command(argv))
     args = parser.parse_args(argv)
     if getattr(args, "func", None) is None:
         parser.print_help(sys.stderr)

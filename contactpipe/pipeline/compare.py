@@ -46,7 +46,7 @@ import xarray as xr
 
 from ..archive import open_archive
 from ..exceptions import ArchiveError
-from ..files import atomic_path, check_output_dir, check_output_path
+from ..files import atomic_path, check_output_dir, check_output_path, make_folder
 from .inputs import grid_of, radius_of_area, scene_of
 from .reference import LOADING_FORMS, closed_form_solution
 
@@ -611,7 +611,7 @@ def write_table(table: xr.Dataset, out) -> pathlib.Path:
     checked first (:func:`check_table_path`); its folder is created.
     """
     out = check_table_path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(out.parent)
     with atomic_path(out) as tmp:
         if out.suffix.lower() == ".nc":
             table.to_netcdf(tmp, engine="netcdf4")

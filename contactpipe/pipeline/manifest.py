@@ -160,7 +160,14 @@ def read_manifest(out_dir) -> dict:
     except (OSError, ValueError) as err:     # ValueError: not JSON, or not UTF-8
         raise ArchiveError(f"{path}: unreadable sweep manifest ({type(err).__name__}: "
                            f"{err})") from None
-    return check_manifest(manifest, str(path))
+    except RecursionError:
+        raise ArchiveError(f"{path}: unreadable sweep manifest (arrays or objects nested "
+                           "too deep to read; a manifest nests a few levels)") from None
+    try:
+        return check_manifest(manifest, str(path))
+    except RecursionError:                   # nested values deep enough to pass json.load
+        raise ArchiveError(f"{path}: not a contactpipe sweep manifest (values nested too "
+                           "deep; a manifest nests a few levels)") from None
 
 
 def new_manifest(base, mode, names, values, funcs, dims, members, created=None) -> dict:

@@ -22,7 +22,7 @@ import numpy as np
 import xarray as xr
 
 from ..exceptions import ArchiveError
-from ..files import atomic_path, check_output_dir, check_output_path
+from ..files import atomic_path, check_output_dir, check_output_path, make_folder
 from ..fretting import boundary_constants, fretting_regime
 from .combine import open_member
 from .inputs import scene_of
@@ -147,7 +147,7 @@ def write_regime_table(table: xr.Dataset, out) -> pathlib.Path:
         raise ArchiveError(f"{out}: the regime table is written as CSV (.csv), got suffix "
                            f"{out.suffix!r}")
     check_output_dir(out.parent, "folder of the regime table")
-    out.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(out.parent)
     lines = [f"# {k}: {' '.join(str(v).split())}" for k, v in table.attrs.items()]
     frame = table.reset_coords().to_dataframe()
     with atomic_path(out) as tmp:

@@ -104,7 +104,7 @@ from tqdm.auto import tqdm
 from ..exceptions import ArchiveError, ContactpipeError
 from ..exceptions import one_line as _one_line
 from ..files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
-                     utc_now as _now, write_json as _write_json)
+                     make_folder, utc_now as _now, write_json as _write_json)
 from . import compare as compare_stage, plot as plot_stage, stress_cmd as stress_stage
 from .combine import open_sweep
 from .config import CLOSED_FORM, FIGURES, MEMBER_FIGURES, PipelineSpec, read_pipeline_file
@@ -408,7 +408,7 @@ def run_pipeline(path, *, scheduler=None, progress=True, n_workers=None,
     t0 = _time.perf_counter()
     spec = read_pipeline_file(path)
     out = check_output_dir(spec.out, "pipeline out folder", inputs=[spec.path])
-    out.mkdir(parents=True, exist_ok=True)
+    make_folder(out)
     with exclusive_lock(out / LOCK, "pipeline run", error=PipelineLockedError):
         try:
             return _run_locked(spec, scheduler=scheduler, progress=progress,

@@ -133,7 +133,8 @@ import time
 
 from ..archive import open_archive
 from ..exceptions import ArchiveError, one_line
-from ..files import LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock
+from ..files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
+                     make_folder)
 from ..scene import Scene
 from .combine import open_member, open_sweep
 from .config import SweepFile, load_sweep_file, read_sweep_file
@@ -399,7 +400,7 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
         base = Scene.from_toml(base)
     names, values, funcs, members = build_members(base, axes, mode)
     out_dir = out_dir.resolve()
-    out_dir.mkdir(parents=True, exist_ok=True)
+    make_folder(out_dir)
     with exclusive_lock(out_dir / LOCK, "sweep", error=SweepLockedError):
         _clean_temporaries(out_dir, members)
         by_digest: dict[str, list] = {}
