@@ -591,13 +591,29 @@ def fatigue(stress_ds: xr.Dataset, criterion: str = "crossland", **constants) ->
             s = np.stack([np.asarray(group[v].isel(x3=k - int(z0)).values, dtype=float)
                           for v in COMPONENTS], axis=-1)            # (nt, n1, n2, 6)
             s = s.reshape(nt, n1 * n2, 6).transpose(1, 0, 2)
-            parts = [fn(s[i:i + block], c) for i in range(0, n1 * n2, block)]
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                # an overflow is refused below (_refuse_nonfinite), not warned of
+                parts = [fn(s[i:i + block], c) for i in range(0, n1 * n2, block)]
             res = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
             if fields is None:
                 fields = {name: np.empty((nz, n1, n2)) for name in res}
             for name, v in res.items():
                 fields[name][k] = v.reshape(n1, n2)
+    _refuse_nonfinite(criterion, c, fields)
     return _result(stress_ds, criterion, c, fields, main, units)
+
+
+def _refuse_nonfinite(criterion, c, fields) -> None:
+    """ValueError when a field came out NaN or inf (constants so small or large that the
+    criterion overflows, or a stress holding NaN): such a result is never returned."""
+    bad = [name for name, v in fields.items() if not np.all(np.isfinite(v))]
+    if bad:
+        given = ", ".join(f"{k} = {c[k]!r}" for k in ("torsion_limit", "bending_limit",
+                                                       "young") if k in c)
+        raise ValueError(f"criterion {criterion!r}: {', '.join(bad)} came out NaN or inf"
+                         + (f" with {given}" if given else "")
+                         + ": give constants of a material (fatigue limits of the order of "
+                           "1e6 to 1e10 Pa) and a stress free of NaN")
 
 
 def _result(stress_ds, criterion, c, fields, main, units) -> xr.Dataset:

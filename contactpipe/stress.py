@@ -54,12 +54,15 @@ import xarray as xr
 
 from ._version import __version__
 from .archive import open_archive
+from .archive.content import content_problems
+from .archive.schema import join_problems
 from .exceptions import ArchiveError
-from .files import atomic_path, loads_toml
+from .files import atomic_path, loads_toml, make_folder
 from .solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
 
-__all__ = ["subsurface_stress", "save_stress", "open_stress", "is_stress_file", "body_poisson",
-           "BODIES", "STRESS_VARIABLES", "check_request"]
+__all__ = ["subsurface_stress", "save_stress", "open_stress", "verify_stress",
+           "is_stress_file", "body_poisson", "BODIES", "STRESS_VARIABLES", "check_request",
+           "MAX_DEPTH_SIDES"]
 
 BODIES = ("halfspace", "indenter")
 #: Variables of a stress dataset: long names (all in Pa).
@@ -75,6 +78,10 @@ STRESS_VARIABLES = {
 FIELD_DIMS = ("time", "x3", "x1", "x2")
 #: Default bound of the memory of one output block [bytes] (7 variables, float64).
 BLOCK_BYTES = 64 * 2 ** 20
+#: Deepest depth allowed, in units of the grid's larger side L: at 1000 L the field is
+#: that of a point load to within the storage's rounding (it falls as 1/x3^2 from the
+#: contact's scale on), and far beyond, the kernels overflow into NaN.
+MAX_DEPTH_SIDES = 1000
 
 
 # --------------------------------------------------------------------------- checks
@@ -196,6 +203,12 @@ def check_request(ds, x3, body="halfspace", time=None, poisson=None):
             raise ArchiveError(f"'{name}' has dims {ds[name].dims}, expected "
                                "('time', 'x1', 'x2')")
     grid = _grid(ds)
+    side = max(grid[0] * grid[2], grid[1] * grid[3])
+    deepest = MAX_DEPTH_SIDES * side
+    if depths[-1] > deepest:
+        raise ValueError(f"x3 = {float(depths[-1]):g} m is too deep: depths must be from 0 to "
+                         f"{deepest:g} m ({MAX_DEPTH_SIDES} times the grid's larger side, "
+                         f"{side:g} m); below that the field is a point load's")
     idx = _time_index(ds, time)
     if poisson is None:
         nu = body_poisson(ds, body)
@@ -233,6 +246,9 @@ def _block(arrays, names, depths, op: SubsurfaceOperator, sign_q: float):
             op.stress(specs[k], z, out=buf)
             out[:len(COMPONENTS), k, j] = buf
             out[-1, k, j] = von_mises(*buf)
+    if not np.all(np.isfinite(out)):
+        raise ArchiveError(f"the stress at x3 = {float(np.max(depths)):g} m overflows to NaN "
+                           "or inf: nothing written (give depths of the contact's scale)")
     return out
 
 
@@ -391,6 +407,18 @@ def _dataset(sel, depths, data, body, nu, attrs, source) -> xr.Dataset:
     return out
 
 
+def _refuse_nonfinite(st, fields) -> None:
+    """ArchiveError when a field of ``st`` (in memory) holds NaN or inf: never written."""
+    for v in fields:
+        values = np.asarray(st[v].values)
+        if not np.all(np.isfinite(values)):
+            bad = np.argwhere(~np.isfinite(values))[0]
+            at = ", ".join(f"{d} = {float(st[d].values[i]):g}"
+                           for d, i in zip(st[v].dims, bad))
+            raise ArchiveError(f"{v} holds NaN or inf (first at {at}): a stress file is "
+                               "never written with them")
+
+
 def _write_streamed(st: xr.Dataset, tmp, encoding) -> None:
     """Write a lazy stress dataset block by block: the coordinates and attributes first
     (xarray), then the fields one (instants x depths) block at a time, its seven
@@ -406,6 +434,7 @@ def _write_streamed(st: xr.Dataset, tmp, encoding) -> None:
             var = nc.createVariable(v, e["dtype"], FIELD_DIMS, zlib=e["zlib"],
                                     complevel=e.get("complevel", 4),
                                     shuffle=e.get("shuffle", False),
+                                    fletcher32=e.get("fletcher32", False),
                                     chunksizes=e["chunksizes"], fill_value=False)
             var.setncatts(st[v].attrs)
             # whole chunks are written once: a cache of one chunk, not HDF5's default of
@@ -418,6 +447,7 @@ def _write_streamed(st: xr.Dataset, tmp, encoding) -> None:
             for nz in zchunks:
                 block = st[fields].isel(time=slice(t0, t0 + nt), x3=slice(z0, z0 + nz))
                 block = block.compute()
+                _refuse_nonfinite(block, fields)
                 for v in fields:
                     nc[v][t0:t0 + nt, z0:z0 + nz] = block[v].values
                 del block
@@ -457,17 +487,21 @@ def save_stress(st: xr.Dataset, path, precision: str = "float64",
                            f"{FIELD_DIMS}")
     if precision not in ("float64", "float32"):
         raise ValueError(f"precision = {precision!r}: allowed 'float64', 'float32'")
-    enc = {"zlib": bool(compress), "_FillValue": None, "dtype": precision}
+    # a fletcher32 checksum per chunk, as archives have: open_stress(verify=True) and the
+    # figures find a damaged chunk instead of drawing it
+    enc = {"zlib": bool(compress), "_FillValue": None, "dtype": precision,
+           "fletcher32": True}
     if compress:
         enc.update(complevel=1, shuffle=True)
     n1, n2 = st.sizes["x1"], st.sizes["x2"]
     encoding = {v: dict(enc, chunksizes=(1, 1, n1, n2)) for v in STRESS_VARIABLES}
     st = st.copy()
     st.attrs = dict(st.attrs, complete="true")
-    path.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(path.parent)
     try:
         with atomic_path(path) as tmp:
             if st["s11"].chunks is None:
+                _refuse_nonfinite(st, STRESS_VARIABLES)
                 st.to_netcdf(tmp, mode="w", format="NETCDF4", engine="netcdf4",
                              encoding=encoding)
             else:
@@ -480,19 +514,42 @@ def save_stress(st: xr.Dataset, path, precision: str = "float64",
     return path
 
 
-def open_stress(path, chunks=None) -> xr.Dataset:
-    """Open a stress file written by :func:`save_stress` (lazily, dask-backed).
+def verify_stress(path) -> None:
+    """Read every value of the stress file at ``path`` once, block by block, as archives
+    are verified (:func:`contactpipe.archive.content_problems`: NaN or inf, a checksum
+    mismatch or a corrupt chunk, located to the instant).
 
     Raises
     ------
     ArchiveError
-        Missing, unreadable, incomplete, or not a stress dataset.
+        Not a complete stress file, or one naming each damaged variable.
+    """
+    with open_stress(path, chunks=False) as st:
+        problems = content_problems(st)
+    if problems:
+        raise ArchiveError(f"{path}: damaged stress file: {join_problems(problems)}")
+
+
+def open_stress(path, chunks=None, *, verify: bool = False) -> xr.Dataset:
+    """Open a stress file written by :func:`save_stress` (lazily, dask-backed; ``chunks``
+    False: lazily indexed, without dask).
+
+    ``verify``: read every value once first (:func:`verify_stress`); the figures do.
+
+    Raises
+    ------
+    ArchiveError
+        Missing, unreadable, incomplete, or not a stress dataset; with ``verify``, a
+        value that is NaN or inf or cannot be read back.
     """
     path = pathlib.Path(path)
+    if verify:
+        verify_stress(path)
     if not path.exists():
         raise ArchiveError(f"{path}: no such stress file")
     try:
-        st = xr.open_dataset(path, engine="netcdf4", chunks={} if chunks is None else chunks)
+        kwargs = {} if chunks is False else {"chunks": {} if chunks is None else chunks}
+        st = xr.open_dataset(path, engine="netcdf4", **kwargs)
     except Exception as err:              # noqa: BLE001
         raise ArchiveError(f"{path}: not a readable netCDF file: "
                            f"{' '.join(str(err).split())}") from None

@@ -128,13 +128,17 @@ PLOT_FIELDS = (
 
 STRESS_CRITERIA = ("none",) + tuple(CRITERIA)
 _PA = "a finite number > 0 [Pa]"
+#: Fatigue limits allowed [Pa]: every material's lies well inside; far outside, the
+#: criteria's indices overflow (1e308) or divide by nearly nothing (1e-300).
+LIMIT_RANGE = (1e3, 1e12)
+_LIMIT = f"a number from {LIMIT_RANGE[0]:g} to {LIMIT_RANGE[1]:g} [Pa]"
 #: The criteria's constants (:func:`contactpipe.fatigue`); which apply to which criterion
 #: is read from :data:`contactpipe.fatigue.CRITERIA`.
 CONSTANT_FIELDS = (
-    Field("torsion_limit", "number", _PA + ", the fully reversed torsion fatigue limit",
-          ok=lambda x: x > 0, unit="Pa"),
-    Field("bending_limit", "number", _PA + ", the fully reversed bending fatigue limit",
-          ok=lambda x: x > 0, unit="Pa"),
+    Field("torsion_limit", "number", _LIMIT + ", the fully reversed torsion fatigue limit",
+          ok=lambda x: LIMIT_RANGE[0] <= x <= LIMIT_RANGE[1], unit="Pa"),
+    Field("bending_limit", "number", _LIMIT + ", the fully reversed bending fatigue limit",
+          ok=lambda x: LIMIT_RANGE[0] <= x <= LIMIT_RANGE[1], unit="Pa"),
     Field("young", "number", _PA + ", Young's modulus", ok=lambda x: x > 0, unit="Pa"),
     Field("poisson", "number", "a number in [0, 0.5]", ok=lambda x: 0 <= x <= 0.5, unit="1"),
     Field("plane_step", "number", "an angle in [1, 90] [deg] (the smallest, 1, already "

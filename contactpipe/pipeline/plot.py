@@ -52,9 +52,9 @@ import numpy as np
 import xarray as xr
 
 from .. import analytic
-from ..exceptions import ArchiveError, ContactpipeError
+from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line
+from ..files import atomic_path, check_output_dir, check_output_path, make_folder
 from ..interrupts import raise_if_signalled
-from ..files import atomic_path, check_output_dir, check_output_path
 from ..materials import composite_modulus
 from ..nomenclature import VARIABLES
 from ..stress import is_stress_file, open_stress
@@ -117,7 +117,7 @@ def save_figure(fig, path) -> pathlib.Path:
     """
     path = check_output_path(path, "figure")
     check_output_dir(path.parent, "folder of the figure")
-    path.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(path.parent)
     with warnings.catch_warnings():
         # the tight layout gives up (with a warning) on axes it cannot fit: drawn as is
         warnings.filterwarnings("ignore", message=".*[Tt]ight.?layout", category=UserWarning)
@@ -143,9 +143,9 @@ def input_kind(path) -> str:
 def open_input(path, expect: str | None = None):
     """Open a figure input: yields (kind, Dataset) and closes it after.
 
-    An archive is opened verified (:func:`contactpipe.open_archive`), a stress file by
-    :func:`contactpipe.stress.open_stress`, a sweep folder by :func:`open_sweep`; all
-    lazily.
+    An archive is opened verified (:func:`contactpipe.open_archive`), a stress file
+    verified too (:func:`contactpipe.stress.open_stress`: NaN, inf and checksum errors
+    refused), a sweep folder by :func:`open_sweep`; all lazily.
 
     Raises
     ------
@@ -156,8 +156,8 @@ def open_input(path, expect: str | None = None):
     kind = input_kind(path)
     if expect is not None and kind != expect:
         raise ArchiveError(f"{path} is {INPUTS[kind][0]}, not {INPUTS[expect][0]}")
-    opener = {"archive": lambda p: load_dataset(p)[0], "stress": open_stress,
-              "sweep": open_sweep}[kind]
+    opener = {"archive": lambda p: load_dataset(p)[0],
+              "stress": lambda p: open_stress(p, verify=True), "sweep": open_sweep}[kind]
     ds = opener(path)
     try:
         yield kind, ds
@@ -468,8 +468,11 @@ def _map_status(fig, ax, ds, k, extent):
     from matplotlib.colors import BoundaryNorm, ListedColormap
     status = np.asarray(ds["status"].isel(time=k).values, float)
     mu = None
-    with contextlib.suppress(ArchiveError):
-        mu = float(scene_of(ds).friction.mu)
+    if "mu" in ds.data_vars:                 # a friction map: the archive holds it
+        mu = float(np.max(ds["mu"].values))
+    else:
+        with contextlib.suppress(ArchiveError, SceneError):
+            mu = scene_of(ds).friction.largest
     if mu != 0:
         colours, bounds, ticks = STATUS_COLOURS, [-0.5, 0.5, 1.5, 2.5], [0, 1, 2]
         names = ("separated", "stick", "slip")
@@ -867,14 +870,20 @@ def main(args) -> int:
         print(_kind_error(kind, what, source), file=sys.stderr)
         return 2
     inputs = _inputs(source)
-    if kind == "all":
-        check_output_dir(args.output, "figure folder", inputs=inputs)
-        written = standard_figures(source, args.output, "",
-                                   -1 if args.instant is None else args.instant)
-    else:
-        target = check_output_path(args.output, "figure", inputs=inputs)
-        check_output_dir(target.parent, "folder of the figure")
-        written = [save_figure(_draw(kind, source, args), target)]
+    try:
+        if kind == "all":
+            check_output_dir(args.output, "figure folder", inputs=inputs)
+            written = standard_figures(source, args.output, "",
+                                       -1 if args.instant is None else args.instant)
+        else:
+            target = check_output_path(args.output, "figure", inputs=inputs)
+            check_output_dir(target.parent, "folder of the figure")
+            written = [save_figure(_draw(kind, source, args), target)]
+    except ValueError as err:            # --instant, --variable not in this input: bad input
+        if getattr(args, "debug", False) or isinstance(err, ContactpipeError):
+            raise
+        print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
+        return 2
     for path in written:
         print(f"wrote {path}")
     return 0

@@ -10,9 +10,11 @@ last; ``--time all`` every instant. The archive is read lazily and the stress is
 to the file block by block (instants x depths), so archives larger than memory work.
 The file is written atomically (nothing is left on failure).
 
-Exit status: 0 on success; 2 on bad input (arguments, an unreadable or foreign archive,
-an unknown body, a negative depth, a time not in the archive), with one line on stderr;
-1 when the computation or the write fails.
+Exit status: 0 on success; 2 on bad input (arguments, an output that is an input or the
+other output, an unreadable, foreign or damaged archive, an unknown body, a depth below
+0 or deeper than 1000 times the grid's larger side, a time not in the archive), with one
+line on stderr; 1 when the computation or the write fails (a read-only or full disk
+included). No stress file holding NaN or inf is ever written.
 
 The pipeline's ``[stress]`` product (:mod:`contactpipe.pipeline.run`) is written here too:
 :func:`write_stress_product` puts the stress and, when the pipeline file asks for a
@@ -35,7 +37,7 @@ import xarray as xr
 from ..archive import open_archive
 from ..exceptions import ArchiveError, ContactpipeError, one_line
 from ..fatigue import fatigue
-from ..files import atomic_path, check_output_path
+from ..files import atomic_path, check_output_path, make_folder
 from ..stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
 from .config import StressSpec
 from .plot import plot_stress, save_figure
@@ -101,16 +103,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _bad_input(args):
-    """Every check that needs no computation; returns the opened archive."""
+    """Every check that needs no computation; returns the opened archive, verified (a
+    damaged archive, e.g. one with a negative pressure, is refused as compare and plot
+    refuse it)."""
     inputs = [args.archive]
-    out = check_output_path(args.output, "stress output", inputs=inputs)
+    out = check_output_path(args.output, "stress output (-o)", inputs=inputs)
     if args.figure is not None:
-        check_output_path(args.figure, "figure", inputs=inputs + [out])
+        check_output_path(args.figure, "figure (--figure)", inputs=inputs,
+                          others=[("stress output (-o)", out)])
     depths = parse_depths(args.x3)
     time = parse_time(args.time)
     if args.threads < 1:
         raise ValueError(f"--threads {args.threads}: must be >= 1")
-    ds = open_archive(args.archive)
+    ds = open_archive(args.archive, verify=True)
     try:
         check_request(ds, depths, args.body, time)
     except BaseException:
@@ -130,8 +135,13 @@ def main(args) -> int:
     try:
         st = subsurface_stress(ds, depths, body=args.body, time=time, fft=args.fft,
                                threads=args.threads)
-        args.output.parent.mkdir(parents=True, exist_ok=True)
+        make_folder(args.output.parent)
         save_stress(st, args.output, precision=args.precision)
+    except (ArchiveError, OSError) as err:   # could not be computed or written: a failed run
+        if getattr(args, "debug", False):
+            raise
+        print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
+        return 1
     finally:
         ds.close()
     summary = _summary(args.output)
@@ -255,9 +265,9 @@ def write_stress_product(archive, target, spec: StressSpec) -> dict:
     target = pathlib.Path(target)
     time = {"last": None, "all": "all"}[spec.time] if isinstance(spec.time, str) else \
         list(spec.time)
-    target.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(target.parent)
     with dask.config.set(scheduler="synchronous"), _small_chunk_cache(), \
-            open_archive(archive) as ds:
+            open_archive(archive, verify=True) as ds:
         st = subsurface_stress(ds, list(spec.depths), body=spec.body, time=time)
         st.attrs[SETTINGS_ATTR] = json.dumps(spec.settings(), sort_keys=True)
         st.attrs[DIGEST_ATTR] = spec.digest()
