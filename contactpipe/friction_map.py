@@ -8,7 +8,8 @@ Refused, with one message naming ``friction.mu`` and the file: a missing or unre
 file, no variable ``mu`` over x1, x2, coordinates that are not distinct finite numbers,
 values that are not finite or are negative, and a grid that the file does not cover.
 
-Units: mu [1], coordinates [m].
+Units: mu [1], coordinates [m], or in mm or um when their ``units`` attribute says so
+(converted to metres); other units, and coordinates that are dates, are refused.
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ import os
 import numpy as np
 
 from .exceptions import SceneError
-from .gridded import coordinate_problems, coverage_problems, variable_problems
+from .gridded import coordinate_problems, coverage_problems, in_metres, variable_problems
 
 __all__ = ["check_mu_file", "mu_on_grid", "largest", "WHERE"]
 
@@ -91,7 +92,8 @@ def mu_on_grid(file, x1, x2) -> np.ndarray:
     x1 = np.asarray(x1, dtype=float)
     x2 = np.asarray(x2, dtype=float)
     with _open(os.fspath(file)) as ds:
-        mu = ds["mu"].load().transpose("x1", "x2").sortby(["x1", "x2"]).astype(float)
+        mu = in_metres(ds["mu"].load()).transpose("x1", "x2").sortby(["x1", "x2"])
+        mu = mu.astype(float)
     lo, hi = float(mu.min()), float(mu.max())
     c1, c2 = np.asarray(mu.x1.values, float), np.asarray(mu.x2.values, float)
     if c1.shape == x1.shape and c2.shape == x2.shape and np.array_equal(c1, x1) \

@@ -21,7 +21,7 @@ import os
 import numpy as np
 
 from .exceptions import SceneError
-from .gridded import coordinate_problems, coverage_problems, variable_problems
+from .gridded import coordinate_problems, coverage_problems, in_metres, variable_problems
 
 __all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface"]
 
@@ -236,7 +236,7 @@ def surface_gap(x1, x2, file):
         x1 = np.asarray(x1, dtype=float)
         x2 = np.asarray(x2, dtype=float)
         with xr.open_dataset(path) as ds:
-            gap = ds["gap"].load().transpose("x1", "x2").sortby(["x1", "x2"])
+            gap = in_metres(ds["gap"].load()).transpose("x1", "x2").sortby(["x1", "x2"])
         gap = gap.astype(float)
         # Clip into the file's range: check_surface allowed a rounding-size overshoot.
         x1c = np.clip(x1, float(gap.x1[0]), float(gap.x1[-1]))

@@ -9,7 +9,38 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["coordinate_problems", "coverage_problems", "variable_problems"]
+__all__ = ["coordinate_problems", "coverage_problems", "variable_problems",
+           "in_metres", "LENGTH_UNITS"]
+
+#: Units a coordinate may carry, and their size in metres; none given means metres.
+LENGTH_UNITS = {"m": 1.0, "metre": 1.0, "metres": 1.0, "meter": 1.0, "meters": 1.0,
+                "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "\u03bcm": 1e-6}
+
+
+def _unit_factor(ds, dim: str):
+    """(metres per unit of coordinate ``dim``, problem or None)."""
+    units = ds[dim].attrs.get("units")
+    if units is None:
+        return 1.0, None
+    key = str(units).strip()
+    if key == "":
+        return 1.0, None
+    factor = LENGTH_UNITS.get(key)
+    if factor is None:
+        return 1.0, (f"coordinate {dim!r} has units {str(units)[:40]!r}: allowed m, mm, "
+                     f"um (or \u00b5m), or none (metres)")
+    return factor, None
+
+
+def in_metres(ds):
+    """``ds`` with its ``x1``, ``x2`` coordinates converted to metres (from the units
+    of :data:`LENGTH_UNITS`); checked by :func:`coordinate_problems` first."""
+    for dim in ("x1", "x2"):
+        factor, _ = _unit_factor(ds, dim)
+        if factor != 1.0:
+            ds = ds.assign_coords({dim: (dim, np.asarray(ds[dim].values, float) * factor,
+                                         dict(ds[dim].attrs, units="m"))})
+    return ds
 
 
 def variable_problems(ds, name: str, where: str, meaning: str, unit: str) -> list:
@@ -33,15 +64,25 @@ def variable_problems(ds, name: str, where: str, meaning: str, unit: str) -> lis
 def coordinate_problems(ds, where: str):
     """(problems, {dim: (min, max)}) of a dataset's ``x1``, ``x2`` coordinates [m].
 
-    Each coordinate must exist and hold at least two distinct finite values; ``where``
-    starts every message (the key and the file).
+    Each coordinate must exist, hold at least two distinct finite real numbers (not
+    dates nor durations) and carry units of length that :data:`LENGTH_UNITS` converts
+    (m, mm, um; none: metres); ``where`` starts every message (the key and the file).
+    The ranges are in metres.
     """
     problems, ranges = [], {}
     for dim in ("x1", "x2"):
         if dim not in ds.coords:
             problems.append(f"{where}: dimension {dim!r} has no coordinate [m]")
             continue
-        c = np.asarray(ds[dim].values, dtype=float)
+        if ds[dim].dtype.kind not in "iuf":
+            problems.append(f"{where}: coordinate {dim!r} holds {ds[dim].dtype} values; "
+                            f"coordinates must be real numbers [m]")
+            continue
+        factor, problem = _unit_factor(ds, dim)
+        if problem is not None:
+            problems.append(f"{where}: {problem}")
+            continue
+        c = np.asarray(ds[dim].values, dtype=float) * factor
         if c.size < 2 or not np.all(np.isfinite(c)) or np.unique(c).size != c.size:
             problems.append(f"{where}: coordinate {dim!r} must hold at least 2 distinct "
                             f"finite values [m], got {c.size} value(s)")

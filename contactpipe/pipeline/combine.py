@@ -89,11 +89,16 @@ def _alignment(out_dir, datasets) -> tuple[bool, bool]:
     return same_time, same_grid
 
 
-def _prepared(ds, same_time, same_grid) -> xr.Dataset:
+def _prepared(ds, same_time, same_grid, taken=()) -> xr.Dataset:
     """A member ready to combine: no attributes; its own cell centres (x1_cell, x2_cell)
-    when the grids differ; on t_norm when the times differ."""
+    when the grids differ; on t_norm when the times differ; a variable named as a sweep
+    dimension (``taken``: a friction map ``mu`` in a ``friction.mu`` sweep) renamed
+    ``<name>_map``."""
     ds = ds.copy()
     ds.attrs = {}
+    clash = {v: f"{v}_map" for v in ds.data_vars if v in taken}
+    if clash:
+        ds = ds.rename_vars(clash)
     if not same_grid:
         # each member keeps its own cell centres (e.g. an automatic grid that grows with
         # the window): x1, x2 stay dimensions (cell positions), x1_cell, x2_cell are
@@ -108,24 +113,38 @@ def _prepared(ds, same_time, same_grid) -> xr.Dataset:
     return ds
 
 
-def _combine_zip(prepared, names, dims) -> xr.Dataset:
+def _labeller(manifest, names):
+    """``label(axis, value)``: a member's coordinate label on an axis, its value
+    (:func:`coord_value`), or its text on an axis that mixes numbers and text
+    (``friction.mu = [0.1, "map.nc"]``: the labels "0.1" and the file's path), so that
+    the coordinate has one type."""
+    mixed = {n: len({isinstance(coord_value(v), str) for v in manifest["axes"][n]}) > 1
+             for n in names}
+
+    def label(n, v):
+        v = coord_value(v)
+        return str(v) if mixed[n] else v
+    return label
+
+
+def _combine_zip(prepared, names, dims, label) -> xr.Dataset:
     parts = []
     for m, ds in prepared:
         ds = ds.expand_dims(member=[m["index"]])
-        coords = {dims[n]: ("member", [coord_value(m["values"][n])]) for n in names}
+        coords = {dims[n]: ("member", [label(n, m["values"][n])]) for n in names}
         coords["digest"] = ("member", [m["digest"]])
         parts.append(ds.assign_coords(coords))
     return xr.concat(parts, "member", **_COMBINE)
 
 
-def _combine_product(prepared, names, dims, manifest) -> xr.Dataset:
+def _combine_product(prepared, names, dims, manifest, label) -> xr.Dataset:
     """One dimension per axis; combine_nested when complete, unstack when holes."""
-    axis_values = {n: [coord_value(v) for v in manifest["axes"][n]] for n in names}
+    axis_values = {n: [label(n, v) for v in manifest["axes"][n]] for n in names}
     shape = [len(axis_values[n]) for n in names]
     cells = {}
     for m, ds in prepared:
-        key = tuple(axis_values[n].index(coord_value(m["values"][n])) for n in names)
-        ds = ds.expand_dims({dims[n]: [coord_value(m["values"][n])] for n in names})
+        key = tuple(axis_values[n].index(label(n, m["values"][n])) for n in names)
+        ds = ds.expand_dims({dims[n]: [label(n, m["values"][n])] for n in names})
         cells[key] = ds.assign_coords(digest=([dims[n] for n in names],
                                               _nested([m["digest"]], len(names))))
     if len(cells) == math.prod(shape):
@@ -199,7 +218,9 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None) -> xr.Dataset:
     -------
     xarray.Dataset
         Mode "product": dimensions = the axes (named as in the manifest's ``dims``:
-        ``friction.mu`` -> ``mu``), coordinates = the axis values. Mode "zip": one
+        ``friction.mu`` -> ``mu``), coordinates = the axis values (as text on an axis
+        that mixes numbers and files: ``friction.mu = [0.1, "map.nc"]``; a member's
+        friction map is then the variable ``mu_map``). Mode "zip": one
         dimension ``member`` with every axis as a coordinate along it. A coordinate
         ``digest`` names each member's archive. Where the members' time coordinates
         differ (a ``tau_ratio`` sweep), the time dimension is ``t_norm`` = (t - t0)/tau
@@ -231,11 +252,14 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None) -> xr.Dataset:
                 opened[m["digest"]] = open_member(out_dir, m, chunks=chunks)
         datasets = [opened[m["digest"]] for m in done]
         same_time, same_grid = _alignment(out_dir, datasets)
-        prepared = [(m, _prepared(ds, same_time, same_grid)) for m, ds in zip(done, datasets)]
+        taken = set(dims.values())
+        prepared = [(m, _prepared(ds, same_time, same_grid, taken))
+                    for m, ds in zip(done, datasets)]
+        label = _labeller(manifest, names)
         if manifest["mode"] == "zip":
-            sw = _combine_zip(prepared, names, dims)
+            sw = _combine_zip(prepared, names, dims, label)
         else:
-            sw = _combine_product(prepared, names, dims, manifest)
+            sw = _combine_product(prepared, names, dims, manifest, label)
         for n in names:
             sw[dims[n]].attrs.update({"long_name": f"sweep axis {n}", "sweep_axis": n})
     except BaseException:

@@ -1,0 +1,369 @@
+"""Bad input through the command line: one line on stderr, no traceback, the README's exit
+status (2 bad input, 1 a failed run), and nothing clobbered or published half-right.
+
+The runs are the tiny fretting scene (rigid sphere on a Maxwell half-space, 24 x 24 cells
+over 2 mm, 20 steps; contactpipe.testing.TINY_SCENES) unless a test says otherwise.
+"""
+import json
+import os
+import pathlib
+import subprocess
+import sys
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+
+import contactpipe as cp
+from contactpipe.pipeline import cli
+from contactpipe.testing import tiny_scene
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def one_line_error(capsys, code, argv):
+    """Run the CLI in-process; assert ``code`` and one line on stderr; return it."""
+    assert cli.main([str(a) for a in argv]) == code, capsys.readouterr()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("contactpipe: error: "), err[-3000:]
+    assert "Traceback" not in err
+    return err
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory):
+    """A folder with the tiny scene (scene.toml), its archive (run.nc), a friction map
+    mu.nc (mu = 0.1 over 3 mm x 3 mm) and a scene reading it (mapped.toml)."""
+    d = tmp_path_factory.mktemp("refusals")
+    scene = tiny_scene("fretting")
+    (d / "scene.toml").write_text(scene.to_toml())
+    cp.simulate(scene, d / "run.nc")
+    x = np.linspace(-1.5e-3, 1.5e-3, 7)
+    xr.Dataset({"mu": (("x1", "x2"), np.full((7, 7), 0.1))},
+               coords={"x1": x, "x2": x}).to_netcdf(d / "mu.nc")
+    (d / "mapped.toml").write_text(scene.replace({"friction.mu": str(d / "mu.nc")}).to_toml())
+    return d
+
+
+def edited_archive(src, dst, edit):
+    """A copy of an archive changed in place by ``edit(nc)`` (checksums kept valid)."""
+    dst.write_bytes(pathlib.Path(src).read_bytes())
+    with netCDF4.Dataset(dst, "a") as nc:
+        edit(nc)
+    return dst
+
+
+# ---------------------------------------------------------------- 15: outputs vs inputs
+
+@pytest.mark.parametrize("case", ["figure is the map", "archive is the map",
+                                  "figure is the map by another path",
+                                  "stress figure is the stress output"])
+def test_no_output_is_an_input_or_another_output(work, tmp_path, capsys, case):
+    """Each output is compared by resolved real path with the inputs (the scene and the
+    files it reads: here the friction map) and with the other outputs, before any work:
+    exit 2, the map's bytes unchanged, nothing written."""
+    before = (work / "mu.nc").read_bytes()
+    out = tmp_path / "o.nc"
+    argv = {
+        "figure is the map": ["run", work / "mapped.toml", "-o", out, "--figure", work / "mu.nc"],
+        "archive is the map": ["run", work / "mapped.toml", "-o", work / "mu.nc"],
+        "figure is the map by another path": [
+            "run", work / "mapped.toml", "-o", out, "--figure",
+            f"{work}/no-such-folder/../mu.nc"],
+        "stress figure is the stress output": [
+            "stress", work / "run.nc", "-o", tmp_path / "S.nc", "--x3", "0,1e-4",
+            "--figure", tmp_path / "S.nc"],
+    }[case]
+    err = one_line_error(capsys, 2, argv + (["--no-progress"] if argv[0] == "run" else []))
+    expected = "is also the stress output" if case.startswith("stress") else "is the input file"
+    assert expected in err
+    assert (work / "mu.nc").read_bytes() == before
+    assert sorted(tmp_path.iterdir()) == []
+
+
+# ---------------------------------------------------------------- 16: never publish NaN
+
+def test_stress_depth_beyond_the_contact_scale_is_refused(work, tmp_path, capsys):
+    """--x3 1e300 (NaN from the kernels before) is refused, naming the range allowed:
+    0 to 1000 times the grid's larger side (2 mm here: 2 m)."""
+    err = one_line_error(capsys, 2, ["stress", work / "run.nc", "-o", tmp_path / "S.nc",
+                                     "--x3", "1e300"])
+    assert "x3 = 1e+300 m is too deep: depths must be from 0 to 2 m" in err
+    assert not (tmp_path / "S.nc").exists()
+
+
+def test_the_deepest_depth_allowed_is_finite_and_a_point_load(work):
+    """At the deepest depth allowed (1000 L, L = 2 mm) the stress is finite and that of
+    the resultant point force: Boussinesq's s33 on the axis, -3W/(2 pi z^2), W = 1000 N,
+    to 1e-3 (the grid's 24 cells are all within 1e-3 z of the axis)."""
+    z = 1000 * 2e-3
+    with cp.open_archive(work / "run.nc") as ds:
+        st = cp.subsurface_stress(ds, [z], chunks=False)
+        w = float(ds["W"].isel(time=-1))
+    s33 = st["s33"].isel(time=0, x3=0).values
+    assert np.all(np.isfinite(s33))
+    np.testing.assert_allclose(s33.min(), -3 * w / (2 * np.pi * z ** 2), rtol=1e-3)
+
+
+def test_stress_refuses_an_archive_with_negative_pressure(work, tmp_path, capsys):
+    """The archive is verified as compare and plot verify it: exit 2, nothing written."""
+    bad = edited_archive(work / "run.nc", tmp_path / "neg.nc",
+                         lambda nc: nc["p"].__setitem__((3, 12, 12), -1e6))
+    err = one_line_error(capsys, 2, ["stress", bad, "-o", tmp_path / "S.nc", "--x3", "0"])
+    assert "negative pressure" in err and not (tmp_path / "S.nc").exists()
+
+
+def _stress_file(work, path, compress=True):
+    from contactpipe.stress import save_stress
+    with cp.open_archive(work / "run.nc") as ds:
+        save_stress(cp.subsurface_stress(ds, [0.0, 1e-4], chunks=False), path,
+                    compress=compress)
+    return path
+
+
+def test_plot_verifies_stress_files(work, tmp_path, capsys):
+    """A stress file holding NaN, and one whose chunk fails its fletcher32 checksum,
+    are refused by plot (exit 2, the variable named) instead of drawn."""
+    good = _stress_file(work, tmp_path / "good.nc", compress=False)
+    nan = edited_archive(good, tmp_path / "nan.nc",
+                         lambda nc: nc["s11"].__setitem__((0, 1, 3, 3), np.nan))
+    err = one_line_error(capsys, 2, ["plot", nan, "-o", tmp_path / "a.png"])
+    assert "damaged stress file: s11 holds NaN or inf" in err
+    with netCDF4.Dataset(good) as nc:
+        raw = np.asarray(nc["s22"][0, 1], dtype="<f8").tobytes()
+    data = bytearray(good.read_bytes())
+    at = bytes(data).find(raw)
+    assert at > 0
+    data[at + len(raw) // 2] ^= 0xFF
+    (tmp_path / "flipped.nc").write_bytes(bytes(data))
+    err = one_line_error(capsys, 2, ["plot", tmp_path / "flipped.nc", "-o", tmp_path / "b.png"])
+    assert "s22: unreadable (checksum mismatch or corrupt chunk)" in err
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == []
+
+
+def test_no_nan_is_written_or_returned(work, tmp_path):
+    """save_stress refuses a stress holding NaN (nothing at the target); fatigue refuses
+    limits that overflow its indices (1e-300 and 1e308 Pa gave NaN Crossland fields);
+    the pipeline file refuses such limits before any work."""
+    from contactpipe.stress import save_stress
+    from contactpipe.pipeline.config import StressSpec  # noqa: F401 - the module loads
+    with cp.open_archive(work / "run.nc") as ds:
+        st = cp.subsurface_stress(ds, [0.0, 1e-4], time="all", chunks=False)
+    bad = st.copy(deep=True)
+    bad["s12"][0, 0, 5, 5] = np.nan
+    with pytest.raises(cp.ArchiveError, match="s12 holds NaN or inf"):
+        save_stress(bad, tmp_path / "bad.nc")
+    assert not (tmp_path / "bad.nc").exists()
+    for limit in (1e-300, 1e308):
+        with pytest.raises(ValueError, match="came out NaN or inf"):
+            cp.fatigue(st, "crossland", torsion_limit=limit, bending_limit=limit)
+    fine = cp.fatigue(st, "crossland", torsion_limit=400e6, bending_limit=600e6)
+    assert all(np.all(np.isfinite(fine[v].values)) for v in fine.data_vars)
+
+
+@pytest.mark.parametrize("limit", ["1e-300", "1e308"])
+def test_pipeline_refuses_fatigue_limits_out_of_range(work, tmp_path, capsys, limit):
+    (tmp_path / "sweep.toml").write_text(f'base = "{work / "scene.toml"}"\n'
+                                         '[axes]\n"friction.mu" = [0.1]\n')
+    (tmp_path / "pipe.toml").write_text(
+        'name = "p"\nout = "out"\n[sweep]\nfile = "sweep.toml"\n[stress]\n'
+        f'depths = [0.0]\ntime = "all"\ncriterion = "crossland"\n'
+        f'torsion_limit = {limit}\nbending_limit = 600e6\n')
+    err = one_line_error(capsys, 2, ["pipeline", tmp_path / "pipe.toml"])
+    assert f"torsion_limit must be a number from 1000 to 1e+12 [Pa]" in err
+    assert not (tmp_path / "out").exists()
+
+
+# ---------------------------------------------------------------- 17: no tracebacks
+
+@pytest.mark.parametrize("change, code, message", [
+    ({"grid.size": [1e-300, 1e-300]}, 2, "grid.size must be two numbers from 1e-09 to 1000"),
+    ({"grid.size": [1e300, 1e300]}, 2, "grid.size must be two numbers from 1e-09 to 1000"),
+    ({"halfspace.young": 5e-324}, 2, "halfspace.young = 5e-324: a shear modulus rounds"),
+], ids=["grid 1e-300", "grid 1e300", "young 5e-324"])
+def test_extreme_scene_values_are_one_line(tmp_path, capsys, change, code, message):
+    scene = tmp_path / "s.toml"
+    text = tiny_scene("fretting").to_toml()
+    for key, value in change.items():
+        table, name = key.split(".")
+        head, _, tail = text.partition(f"[{table}]\n")
+        lines = tail.split("\n")
+        lines = [f"{name} = {json.dumps(value)}" if ln.startswith(f"{name} =") else ln
+                 for ln in lines]
+        text = head + f"[{table}]\n" + "\n".join(lines)
+    scene.write_text(text)
+    err = one_line_error(capsys, code, ["run", scene, "-o", tmp_path / "x.nc", "--no-progress"])
+    assert message in err and not (tmp_path / "x.nc").exists()
+
+
+def test_a_friction_map_over_dates_is_refused(work, tmp_path, capsys):
+    """x1 as datetime64 (a TypeError in interp before): one line naming the coordinate."""
+    x = np.linspace(-1.5e-3, 1.5e-3, 7)
+    xr.Dataset({"mu": (("x1", "x2"), np.full((7, 7), 0.1))},
+               coords={"x1": np.arange(7).astype("datetime64[D]"), "x2": x}
+               ).to_netcdf(tmp_path / "dates.nc")
+    scene = tmp_path / "s.toml"
+    scene.write_text(tiny_scene("fretting").replace(
+        {"friction.mu": str(work / "mu.nc")}).to_toml().replace(
+        str(work / "mu.nc"), str(tmp_path / "dates.nc")))
+    err = one_line_error(capsys, 2, ["run", scene, "-o", tmp_path / "x.nc", "--no-progress"])
+    assert "coordinate 'x1' holds datetime64" in err
+
+
+def test_a_manifest_nested_deep_is_one_line(tmp_path, capsys):
+    """plot DIR over a manifest.json nested 100 000 deep: exit 2 (RecursionError before)."""
+    (tmp_path / "sw").mkdir()
+    (tmp_path / "sw" / "manifest.json").write_text(
+        '{"axes": {"friction.mu": ' + "[" * 100000 + "]" * 100000 + "}}")
+    err = one_line_error(capsys, 2, ["plot", tmp_path / "sw", "-o", tmp_path / "a.png"])
+    assert "nested too deep" in err
+
+
+def test_output_under_1100_missing_folders(work, tmp_path, capsys):
+    """-o under 1100 folders that do not exist yet (a RecursionError before): they are
+    made one level at a time and the archive written."""
+    out = tmp_path.joinpath(*["a"] * 1100) / "x.nc"
+    try:
+        assert cli.main(["run", str(work / "scene.toml"), "-o", str(out),
+                         "--no-progress"]) == 0
+        with cp.open_archive(out) as ds:
+            assert ds.sizes["time"] == 21
+    finally:                             # shutil.rmtree (pytest's clean-up) recurses too
+        for f in out.parent.iterdir() if out.parent.is_dir() else ():
+            f.unlink()
+        folder = out.parent
+        while folder != tmp_path:
+            if folder.is_dir():
+                folder.rmdir()
+            folder = folder.parent
+
+
+def test_maps_of_an_archive_with_a_friction_map(work, tmp_path, capsys):
+    """plot --kind maps of an archive whose mu is a map file ("could not convert string
+    to float" before): drawn, exit 0."""
+    run = tmp_path / "mapped.nc"
+    assert cli.main(["run", str(work / "mapped.toml"), "-o", str(run), "--no-progress"]) == 0
+    assert cli.main(["plot", str(run), "--kind", "maps", "-o", str(tmp_path / "m.png")]) == 0
+    assert (tmp_path / "m.png").stat().st_size > 1000
+
+
+# ---------------------------------------------------------------- 19: map units
+
+def test_friction_map_units(work, tmp_path):
+    """A map whose coordinates say mm, um or µm gives the metre map's mu exactly (a
+    linear mu over x1, interpolated onto the 24 x 24 grid); units of no length (ft,
+    s) are refused naming the coordinate."""
+    from contactpipe.friction_map import check_mu_file, mu_on_grid
+    x = np.linspace(-1.5e-3, 1.5e-3, 7)
+    mu = 0.1 + 0.05 * x[:, None] / 1.5e-3 + 0 * x[None, :]
+    grid = np.linspace(-1e-3, 1e-3, 24)
+
+    def write(name, scale, units):
+        attrs = {} if units is None else {"units": units}
+        xr.Dataset({"mu": (("x1", "x2"), mu)},
+                   coords={"x1": ("x1", x * scale, attrs), "x2": ("x2", x * scale, attrs)}
+                   ).to_netcdf(tmp_path / name)
+        return str(tmp_path / name)
+
+    metres = mu_on_grid(write("m.nc", 1.0, None), grid, grid)
+    np.testing.assert_allclose(metres[:, 0], 0.1 + 0.05 * grid / 1.5e-3, rtol=1e-12)
+    for name, scale, units in (("mm.nc", 1e3, "mm"), ("um.nc", 1e6, "um"),
+                               ("micro.nc", 1e6, "\u00b5m"), ("m2.nc", 1.0, "m")):
+        np.testing.assert_allclose(mu_on_grid(write(name, scale, units), grid, grid), metres,
+                                   rtol=1e-12, atol=0, err_msg=units)
+    for units in ("ft", "s"):
+        problems = check_mu_file(write(f"{units}.nc", 1.0, units), grid, grid)
+        assert problems and f"has units '{units}': allowed m, mm, um" in problems[0]
+
+
+# ---------------------------------------------------------------- 21: start-up
+
+def test_the_validation_path_imports_no_heavy_library(tmp_path):
+    """A refused scene is refused without importing dask, distributed, matplotlib,
+    xarray, netCDF4 or pyfftw (those took about 1.2 s of the 1.3 s import before)."""
+    scene = tmp_path / "bad.toml"
+    scene.write_text('[grid]\npoints = "x"\n')
+    code = ("import sys\nfrom contactpipe.pipeline import cli\n"
+            f"code = cli.main(['run', {str(scene)!r}, '-o', {str(tmp_path / 'x.nc')!r}])\n"
+            "heavy = ('dask', 'distributed', 'matplotlib', 'xarray', 'netCDF4', 'pyfftw')\n"
+            "print(code, sorted(m for m in sys.modules if m.split('.')[0] in heavy))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       cwd=ROOT, timeout=120,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.stdout.strip() == "2 []", r.stdout + r.stderr[-2000:]
+    assert r.stderr.count("\n") == 1 and "grid.points" in r.stderr
+
+
+def test_public_names_load_on_first_use():
+    """Every name of contactpipe.__all__ resolves; cp.fatigue stays the function when
+    the module of that name is imported."""
+    import contactpipe.fatigue  # noqa: F401 - binds the submodule's name on the package
+    assert callable(cp.fatigue) and cp.fatigue.__name__ == "fatigue"
+    for name in cp.__all__:
+        assert getattr(cp, name) is not None, name
+    assert cp.analytic.hertz is not None
+    with pytest.raises(AttributeError):
+        cp.no_such_name
+
+
+# ---------------------------------------------------------------- 23: mixed mu axis
+
+@pytest.mark.parametrize("values", [[0.1, "mu.nc"], ["mu.nc", "mu2.nc"]],
+                         ids=["number and map", "two maps"])
+def test_a_friction_axis_with_map_files(work, tmp_path, capsys, values):
+    """friction.mu = [0.1, "mu.nc"] ran but could not be opened ("mu already exists as
+    coordinate or variable name"): the axis coordinate is the values as text on a mixed
+    axis, the members' maps are the variable mu_map; open_sweep and plot DIR work."""
+    (tmp_path / "mu2.nc").write_bytes((work / "mu.nc").read_bytes())
+    (tmp_path / "mu.nc").write_bytes((work / "mu.nc").read_bytes())
+    base = tiny_scene("fretting", **{"time.steps": 4, "grid.points": [16, 16]})
+    axis = [v if isinstance(v, float) else str(tmp_path / v) for v in values]
+    res = cp.sweep(base, {"friction.mu": axis}, tmp_path / "sw", scheduler="synchronous",
+                   progress=False)
+    assert res.ok
+    with cp.open_sweep(tmp_path / "sw") as sw:
+        expected = [str(v) for v in axis] if isinstance(values[0], float) else axis
+        assert sw["mu"].values.tolist() == expected
+        assert sw["mu_map"].dims == ("mu", "x1", "x2")
+        assert np.all(sw["mu_map"].sel(mu=expected[-1]).values == 0.1)
+        np.testing.assert_array_equal(sw["contact_area"].isel(mu=0).values,
+                                      sw["contact_area"].isel(mu=1).values)
+    assert cli.main(["plot", str(tmp_path / "sw"), "-o", str(tmp_path / "sw.png")]) == 0
+
+
+# ---------------------------------------------------------------- 24: exit statuses
+
+def test_bad_arguments_exit_2(work, tmp_path, capsys):
+    """A 5000-digit integer, plot --instant 1000 and plot --variable bogus are bad input."""
+    scene = tmp_path / "big.toml"
+    scene.write_text(tiny_scene("fretting").to_toml().replace("steps = 20",
+                                                               "steps = " + "9" * 5000))
+    err = one_line_error(capsys, 2, ["run", scene, "-o", tmp_path / "x.nc"])
+    assert "Exceeds the limit (4300 digits)" in err
+    err = one_line_error(capsys, 2, ["plot", work / "run.nc", "--instant", "1000",
+                                     "-o", tmp_path / "a.png"])
+    assert "instant 1000 is out of range" in err
+    stress = _stress_file(work, tmp_path / "S.nc")
+    err = one_line_error(capsys, 2, ["plot", stress, "--variable", "bogus",
+                                     "-o", tmp_path / "a.png"])
+    assert "field 'bogus' is not in the dataset" in err
+    assert not (tmp_path / "a.png").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "stress", "plot", "compare"])
+def test_a_full_disk_is_a_failed_run_everywhere(work, tmp_path, capsys, monkeypatch, command):
+    """Publishing the output fails (ENOSPC on the final rename, as a full or read-only
+    disk gives): exit 1 for every command, one line, nothing at the target."""
+    out = tmp_path / ("o.png" if command == "plot" else "o.nc")
+    argv = {"run": ["run", work / "scene.toml", "-o", out, "--no-progress"],
+            "stress": ["stress", work / "run.nc", "-o", out, "--x3", "0"],
+            "plot": ["plot", work / "run.nc", "-o", out],
+            "compare": ["compare", work / "run.nc", work / "run.nc", "-o", out]}[command]
+
+    def full(src, dst):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(os, "replace", full)
+    err = one_line_error(capsys, 1, argv)
+    assert "No space left on device" in err
+    assert not out.exists()
