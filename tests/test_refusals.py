@@ -147,7 +147,15 @@ def test_no_nan_is_written_or_returned(work, tmp_path):
     limits that overflow its indices (1e-300 and 1e308 Pa gave NaN Crossland fields);
     the pipeline file refuses such limits before any work."""
     from contactpipe.stress import save_stress
-    from contactpipe.pipeline.config import StressSpec  # noqa: F401 - the module loads
+    from contactpipe.pipeline.config import StressSpec
+    from contactpipe.pipeline.stress_cmd import write_stress_product
+    with pytest.raises(ValueError, match=r"x3 = 1e\+300 m is too deep: depths must be from 0 "
+                                         r"to 2 m"):    # the [stress] product: at once
+        write_stress_product(work / "run.nc", tmp_path / "product.nc",
+                             StressSpec(depths=(1e300,), time="all", criterion="crossland",
+                                        constants=(("bending_limit", 6e8),
+                                                   ("torsion_limit", 4e8))))
+    assert sorted(tmp_path.iterdir()) == []
     with cp.open_archive(work / "run.nc") as ds:
         st = cp.subsurface_stress(ds, [0.0, 1e-4], time="all", chunks=False)
     bad = st.copy(deep=True)
@@ -275,6 +283,33 @@ def test_friction_map_units(work, tmp_path):
     for units in ("ft", "s"):
         problems = check_mu_file(write(f"{units}.nc", 1.0, units), grid, grid)
         assert problems and f"has units '{units}': allowed m, mm, um" in problems[0]
+
+
+@pytest.mark.parametrize("units, code", [("mm", 0), ("ft", 2)])
+def test_run_with_a_friction_map_in_units(work, tmp_path, capsys, units, code):
+    """Through the CLI: a map over +-1.5 mm given in mm, mu = 0.1 + 0.05 x1/(1.5 mm),
+    runs with that mu on the cells (to 1e-12; read as metres it was about 0.1 everywhere),
+    one in ft is refused in one line naming the coordinate, exit 2."""
+    x = np.linspace(-1.5, 1.5, 7)
+    xr.Dataset({"mu": (("x1", "x2"), 0.1 + 0.05 * x[:, None] / 1.5 + 0 * x[None, :])},
+               coords={"x1": ("x1", x, {"units": units}), "x2": ("x2", x, {"units": units})}
+               ).to_netcdf(tmp_path / "map.nc")
+    scene = tmp_path / "s.toml"
+    scene.write_text((work / "mapped.toml").read_text().replace(
+        str(work / "mu.nc"), str(tmp_path / "map.nc")))
+    out = tmp_path / "x.nc"
+    argv = ["run", scene, "-o", out, "--no-progress"]
+    if code:
+        err = one_line_error(capsys, code, argv)
+        assert "coordinate 'x1' has units 'ft': allowed m, mm, um" in err
+        assert not out.exists()
+        return
+    assert cli.main([str(a) for a in argv]) == 0
+    assert "Traceback" not in capsys.readouterr().err
+    with cp.open_archive(out) as ds:
+        x1 = ds["x1"].values
+        np.testing.assert_allclose(ds["mu"].values, np.broadcast_to(
+            0.1 + 0.05 * x1[:, None] / 1.5e-3, ds["mu"].shape), rtol=1e-12)
 
 
 # ---------------------------------------------------------------- 21: start-up
