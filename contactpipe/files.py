@@ -28,8 +28,6 @@ import signal
 import stat
 import sys
 
-import filelock
-
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - exercised on Python 3.10 only
@@ -218,6 +216,7 @@ def exclusive_lock(path, what: str, error=LockedError):
         Raised when another process (or another lock object) holds it, with a message
         naming the lock file and its holder.
     """
+    import filelock                      # only where a lock is taken: not to validate
     path = pathlib.Path(path)
     lock = filelock.FileLock(str(path), blocking=False)
     try:

@@ -39,7 +39,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-import tomli_w
 
 from . import friction_map, geometry as _geometry
 from . import materials
@@ -580,6 +579,7 @@ class Scene:
     def to_toml(self) -> str:
         """The scene as TOML text; reading it back gives an equal scene."""
         d = self.to_dict()
+        import tomli_w                   # only to write: validation reads with tomllib
         text = tomli_w.dumps(d)
         compact = _compact_arrays(text)
         return compact if loads_toml(compact) == loads_toml(text) else text

@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import pathlib
 
-from ..exceptions import OutputPathError
 from ..files import check_output_dir, check_output_path
 from . import compare as compare_stage
 from .plot import plot_profiles, save_figure
@@ -53,10 +52,9 @@ def _check_outputs(args) -> None:
     if args.output is not None:
         compare_stage.check_table_path(args.output, inputs=inputs)
     if args.figure is not None:
-        fig = check_output_path(args.figure, "figure", inputs=inputs)
+        others = [] if args.output is None else [("error table (-o)", args.output)]
+        fig = check_output_path(args.figure, "figure", inputs=inputs, others=others)
         check_output_dir(fig.parent, "folder of the figure")
-        if args.output is not None and fig.resolve() == pathlib.Path(args.output).resolve():
-            raise OutputPathError(f"figure {fig} is also the error table: give two names")
 
 
 def main(args) -> int:

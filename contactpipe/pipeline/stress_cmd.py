@@ -35,6 +35,7 @@ import numpy as np
 import xarray as xr
 
 from ..archive import open_archive
+from ..archive.schema import scene_table
 from ..exceptions import ArchiveError, ContactpipeError, one_line
 from ..fatigue import fatigue
 from ..files import atomic_path, check_output_path, make_folder
@@ -102,21 +103,40 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--threads", type=int, default=1, help="FFT threads")
 
 
-def _bad_input(args):
-    """Every check that needs no computation; returns the opened archive, verified (a
-    damaged archive, e.g. one with a negative pressure, is refused as compare and plot
-    refuse it)."""
-    inputs = [args.archive]
+def _scene_files(ds) -> list:
+    """The files the archive's scene read (a surface, a fitted material table, a friction
+    map), as its ``scene`` attribute names them."""
+    table = scene_table(ds.attrs) or {}
+    files = []
+    for part, key in (("geometry", "file"), ("indenter", "file"), ("halfspace", "file"),
+                      ("friction", "mu")):
+        value = table.get(part)
+        value = value.get(key) if isinstance(value, dict) else None
+        if isinstance(value, str) and value:
+            files.append(value)
+    return files
+
+
+def _check_outputs(args, inputs) -> None:
+    """Neither output may be an input nor the other output (resolved real paths)."""
     out = check_output_path(args.output, "stress output (-o)", inputs=inputs)
     if args.figure is not None:
         check_output_path(args.figure, "figure (--figure)", inputs=inputs,
                           others=[("stress output (-o)", out)])
+
+
+def _bad_input(args):
+    """Every check that needs no computation; returns the opened archive, verified (a
+    damaged archive, e.g. one with a negative pressure, is refused as compare and plot
+    refuse it)."""
+    _check_outputs(args, [args.archive])
     depths = parse_depths(args.x3)
     time = parse_time(args.time)
     if args.threads < 1:
         raise ValueError(f"--threads {args.threads}: must be >= 1")
     ds = open_archive(args.archive, verify=True)
     try:
+        _check_outputs(args, [args.archive, *_scene_files(ds)])
         check_request(ds, depths, args.body, time)
     except BaseException:
         ds.close()
