@@ -182,16 +182,25 @@ def test_no_nan_is_written_or_returned(work, tmp_path):
     assert all(np.all(np.isfinite(fine[v].values)) for v in fine.data_vars)
 
 
-@pytest.mark.parametrize("limit", ["1e-300", "1e308"])
-def test_pipeline_refuses_fatigue_limits_out_of_range(work, tmp_path, capsys, limit):
+@pytest.mark.parametrize("table, message", [
+    ("depths = [0.0]\ntorsion_limit = 1e-300\n",
+     "torsion_limit must be a number from 1000 to 1e+12 [Pa]"),
+    ("depths = [0.0]\ntorsion_limit = 1e308\n",
+     "torsion_limit must be a number from 1000 to 1e+12 [Pa]"),
+    ("depths = [1e300]\ntorsion_limit = 4e8\n",
+     "stress.depths must be a list of depths from 0 to 1e+06 [m]"),
+], ids=["limit 1e-300", "limit 1e308", "depth 1e300"])
+def test_pipeline_refuses_stress_settings_out_of_range(work, tmp_path, capsys, table, message):
+    """Fatigue limits outside 1e3..1e12 Pa (NaN Crossland products before) and depths
+    beyond 1000 sides of the largest grid allowed (a minute into a RuntimeError before)
+    are refused with the pipeline file, before any work: exit 2, nothing made."""
     (tmp_path / "sweep.toml").write_text(f'base = "{work / "scene.toml"}"\n'
                                          '[axes]\n"friction.mu" = [0.1]\n')
     (tmp_path / "pipe.toml").write_text(
         'name = "p"\nout = "out"\n[sweep]\nfile = "sweep.toml"\n[stress]\n'
-        f'depths = [0.0]\ntime = "all"\ncriterion = "crossland"\n'
-        f'torsion_limit = {limit}\nbending_limit = 600e6\n')
+        f'time = "all"\ncriterion = "crossland"\nbending_limit = 600e6\n{table}')
     err = one_line_error(capsys, 2, ["pipeline", tmp_path / "pipe.toml"])
-    assert f"torsion_limit must be a number from 1000 to 1e+12 [Pa]" in err
+    assert message in err
     assert not (tmp_path / "out").exists()
 
 

@@ -58,7 +58,8 @@ from ..fatigue import CRITERIA
 from ..files import read_toml
 from ..nomenclature import SERIES, VARIABLES
 from ..scene import Scene
-from ..stress import BODIES
+from ..scene_parts import MAX_SIDE
+from ..stress import BODIES, MAX_DEPTH_SIDES
 from ..tables import Field, Reader, did_you_mean, nesting_depth, show
 from .members import MODES
 
@@ -80,6 +81,9 @@ MAX_WORKERS = 1024
 MAX_RETRIES = 100
 #: Cap on the depths of a stress product.
 MAX_DEPTHS = 10_000
+#: The deepest depth any member can take [m]: 1000 sides of the largest grid a scene
+#: allows (each member refuses more than 1000 of its own sides).
+DEEPEST = MAX_DEPTH_SIDES * MAX_SIDE
 
 _INT_1 = "an integer >= 1"
 
@@ -149,8 +153,9 @@ CONSTANT_FIELDS = (
           unit="1"),
 )
 STRESS_FIELDS = (
-    Field("depths", ("numbers", "table"), "a list of depths [m] >= 0, or a table "
-          "{max = [m], count = [1], min = [m] (default 0)}", ok=lambda z: z >= 0,
+    Field("depths", ("numbers", "table"), f"a list of depths from 0 to {DEEPEST:g} [m], or "
+          "a table {max = [m], count = [1], min = [m] (default 0)}",
+          ok=lambda z: 0 <= z <= DEEPEST,
           min_length=1, unit="m",
           check=lambda v, key: (f"{key} holds {len(v)} depths: above the cap of "
                                 f"{MAX_DEPTHS}" if len(v) > MAX_DEPTHS else None)),
@@ -174,8 +179,8 @@ STRESS_FIELDS = (
     Field("figure", "bool", default=True),
 ) + CONSTANT_FIELDS
 DEPTH_FIELDS = (
-    Field("max", "number", "a finite number > 0 [m]", ok=lambda x: x > 0, required=True,
-          unit="m"),
+    Field("max", "number", f"a number > 0 and <= {DEEPEST:g} [m]",
+          ok=lambda x: 0 < x <= DEEPEST, required=True, unit="m"),
     Field("count", "integer", "an integer >= 2", ok=lambda n: n >= 2, required=True,
           cap=MAX_DEPTHS, cap_why="depths of the stress product"),
     Field("min", "number", "a finite number >= 0 [m]", ok=lambda x: x >= 0, default=0.0,
