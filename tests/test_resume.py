@@ -204,13 +204,14 @@ def test_a_checkpoint_without_the_increments_resumes(tmp_path):
 SIGNALLING_RUNNER = textwrap.dedent("""
     import os, signal, sys
     import contactpipe.pipeline.cli as cli
-    real, stop = cli.simulate, int(os.environ["STOP_AT"])
+    import contactpipe.simulation as sim      # the CLI imports simulate from it per run
+    real, stop = sim.simulate, int(os.environ["STOP_AT"])
     def simulate(*args, **kwargs):
         def on_step(k, t, record):
             if k == stop:
                 os.kill(os.getpid(), signal.SIGTERM)
         return real(*args, on_step=on_step, **kwargs)
-    cli.simulate = simulate
+    sim.simulate = simulate
     sys.exit(cli.main(sys.argv[1:]))
 """)
 
