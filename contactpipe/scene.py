@@ -20,8 +20,8 @@ Each table is read by the table-driven reader of :mod:`contactpipe.tables`; this
 adds the rules across parts: two rigid bodies, the step-start rule without instantaneous
 elasticity or at or above its stability bound, gross sliding, the default time mesh (the
 least uniform mesh that holds every load knot), a creep table (or the data of a fitted one)
-that must reach the end of the load window, and the automatic grid
-(:func:`hertz_semi_axes`).
+that must reach the end of the load window, and the grid: the automatic one and a given
+one must hold the estimated largest contact, a tilt's shift included (:func:`contact_reach`).
 
 TOML has no null: keys whose value is ``None`` (e.g. ``solver.accuracy``) are left out of
 :meth:`Scene.to_dict`, and ``None`` given for a key means "absent".
@@ -49,8 +49,8 @@ from .scene_parts import (MAX_STEPS, MATERIALS, SHAPES, BodySpec, Fretting, Fric
 from .tables import Field, Reader, show
 
 __all__ = ["Scene", "Geometry", "BodySpec", "Friction", "Load", "Fretting", "Grid",
-           "TimeMesh", "Solver", "Output", "SceneError", "hertz_semi_axes",
-           "auto_grid_size", "AUTO_MARGIN", "AUTO_PUNCH_FACTOR"]
+           "TimeMesh", "Solver", "Output", "SceneError", "hertz_semi_axes", "contact_reach",
+           "contact_shifts", "auto_grid_size", "AUTO_MARGIN", "AUTO_PUNCH_FACTOR"]
 
 #: Hertz margin of ``grid.size = "auto"``: side = 2 * margin * contact semi-axis.
 AUTO_MARGIN = 1.5
@@ -90,10 +90,13 @@ def _exp(x: float) -> float:
 
 
 def _creep_factor(spec, window: float, moduli: str) -> float:
-    """The creep factor phi of a body in the Hertz estimate [1]."""
+    """The creep factor phi of a body in the Hertz estimate [1]: of its normal compliance
+    (1 - nu)/G, which with ``bulk = "elastic"`` creeps by its own function
+    (:attr:`contactpipe.materials.Body.normal_creep`, larger than phi early on for
+    Kelvin-Voigt)."""
     if spec.material != "viscoelastic":
         return 1.0
-    creep = spec.creep_function()
+    creep = spec.body().normal_creep
     with np.errstate(all="ignore"):
         if moduli == "window":
             phi = float(creep.max_over(window))
@@ -150,25 +153,88 @@ def hertz_semi_axes(geometry, indenter, halfspace, load, moduli: str = "window")
     radii = (geometry.radius,) * 2 if geometry.shape == "sphere" else geometry.radii
     log_r = 0.5 * (_log(radii[0]) + _log(radii[1]))
     if load.normal_approach is not None:
-        # the approach is imposed: delta = a^2 / R whatever the moduli
-        omega = float(np.max(np.atleast_1d(load.normal_approach)))
+        # the approach is imposed: delta = a^2 / R whatever the moduli; a tilt phi adds
+        # R phi^2 / 2 to it (the gap is the paraboloid moved by R phi)
+        t = load.knots()[0]
+        omega = _knot_values(load.normal_approach, t)
+        for key, r in (("rotation2", radii[0]), ("rotation1", radii[1])):
+            if getattr(load, key) is not None:
+                omega = omega + 0.5 * r * _knot_values(getattr(load, key), t) ** 2
+        omega = float(np.max(omega))
         return tuple(_exp(0.5 * (_log(r) + _log(omega))) for r in radii)
     w_max = float(np.max(load.knots()[1]))
     log_a = (math.log(0.75) + _log(w_max) + log_r + log_c) / 3.0
     return tuple(_exp(log_a + (2.0 / 3.0) * (_log(r) - log_r)) for r in radii)
 
 
+#: Tilt rows: (moment key, rotation key, axis the contact moves along (0: x1, 1: x2)).
+_TILTS = (("moment2", "rotation2", 0), ("moment1", "rotation1", 1))
+
+
+def contact_shifts(geometry, load):
+    """How far a tilt moves the contact along x1 and x2 [m]: a sphere or an ellipsoid
+    keeps its Hertz contact, moved by e = M/W under a moment (the pressure centre) or by
+    R phi under a rotation (R_i of an ellipsoid along the axis), at most at a knot (M/W
+    and phi are monotonic between knots). A flat punch's contact stays on its flat end
+    (0), a surface has no estimate (None).
+
+    Returns
+    -------
+    tuple of two (|shift| [m], key, value, t [s], shift [m]) or None
+        The largest |shift| along x1 and x2, the key and its value at the knot t where
+        it happens, and the signed shift: (0.0, None, None, None, 0.0) without a tilt or
+        where W is not known (approach control).
+    """
+    if geometry.shape == "surface":
+        return None
+    t, W = load.knots()[:2]
+    out = [(0.0, None, None, None, 0.0)] * 2
+    if geometry.shape == "flat_punch":
+        return tuple(out)
+    radii = (geometry.radius,) * 2 if geometry.shape == "sphere" else geometry.radii
+    for mkey, rkey, ax in _TILTS:
+        moment, rotation = getattr(load, mkey), getattr(load, rkey)
+        if moment is not None:
+            values, key = _knot_values(moment, t), f"load.{mkey}"
+            with np.errstate(invalid="ignore", divide="ignore"):
+                shift = values / W
+        elif rotation is not None:
+            values, key = _knot_values(rotation, t), f"load.{rkey}"
+            shift = radii[ax] * values
+        else:
+            continue
+        size = np.abs(shift)
+        if np.isnan(size).all():
+            continue                                  # W unknown: approach control
+        k = int(np.nanargmax(size))
+        out[ax] = (float(size[k]), key, float(values[k]), float(t[k]), float(shift[k]))
+    return tuple(out)
+
+
+def contact_reach(geometry, indenter, halfspace, load):
+    """How far from the centre the largest contact of a load program reaches along x1
+    and x2 [m]: the Hertz semi-axes (:func:`hertz_semi_axes`, the most compliant creep
+    factor over the window) plus the largest shift of a tilt (:func:`contact_shifts`);
+    a flat punch's radius; None for a surface."""
+    if geometry.shape == "surface":
+        return None
+    a = hertz_semi_axes(geometry, indenter, halfspace, load)
+    shifts = contact_shifts(geometry, load)
+    return tuple(float(ai + s[0]) for ai, s in zip(a, shifts))
+
+
 def auto_grid_size(geometry, indenter, halfspace, load):
     """Grid sides (L1, L2) [m] of ``grid.size = "auto"``: 2 * :data:`AUTO_MARGIN` times
-    the Hertz semi-axes of the largest contact (:func:`hertz_semi_axes`), or
-    :data:`AUTO_PUNCH_FACTOR` times a flat punch's radius; None for a surface."""
+    the reach of the largest contact (:func:`contact_reach`: the Hertz semi-axes plus
+    a tilt's shift), or :data:`AUTO_PUNCH_FACTOR` times a flat punch's radius; None for
+    a surface."""
     if geometry.shape == "surface":
         return None
     if geometry.shape == "flat_punch":
         side = AUTO_PUNCH_FACTOR * geometry.radius
         return side, side
-    a = hertz_semi_axes(geometry, indenter, halfspace, load)
-    return tuple(float(2 * AUTO_MARGIN * ai) for ai in a)
+    reach = contact_reach(geometry, indenter, halfspace, load)
+    return tuple(float(2 * AUTO_MARGIN * r) for r in reach)
 
 
 # ----------------------------------------------------------------------------- rules across parts
@@ -186,6 +252,7 @@ def _check_scene(p: dict, problems: list):
         if not problems:
             _check_friction_map(p, problems)
             _check_tilts(p, problems)
+            _check_reach(p, problems)
             _check_twist(p, problems)
     return time
 
@@ -305,58 +372,89 @@ def _check_friction_map(p, problems):
         problems.extend(friction_map.check_mu_file(fric.mu, *axes))
 
 
-#: Tilt rows: (moment key, rotation key, axis the contact moves along (0: x1, 1: x2)).
-_TILTS = (("moment2", "rotation2", 0), ("moment1", "rotation1", 1))
-
-
 def _check_tilts(p, problems):
-    """A tilt that would open the contact, decided from a Hertz estimate where there is one:
-    a sphere or ellipsoid tilted by phi (or loaded off-centre by M/W) keeps its Hertz
-    contact, moved by R phi (or e = M/W) along the axis; it must stay on the grid. A flat
-    punch whose resultant M/W lies beyond its flat end would tip: the contact opens."""
+    """A flat punch whose resultant M/W lies beyond its flat end would tip: the contact
+    opens (a tilted punch under a force or an approach lifts on one side: valid)."""
     geo, load = p["geometry"], p["load"]
-    if geo is None or load is None or geo.shape == "surface":
-        return
-    axes = _grid_axes(p)
-    if axes is None:
+    if geo is None or load is None or geo.shape != "flat_punch":
         return
     t, W = load.knots()[:2]
-    semi = (geo.radius,) * 2 if geo.shape == "flat_punch" else \
-        hertz_semi_axes(geo, p["indenter"], p["halfspace"], load)
-    for mkey, rkey, ax in _TILTS:
-        moment, rotation = getattr(load, mkey), getattr(load, rkey)
-        if moment is None and rotation is None:
+    for mkey, _rkey, ax in _TILTS:
+        moment = getattr(load, mkey)
+        if moment is None:
             continue
-        name = ("x1", "x2")[ax]
-        half = float(np.abs(axes[ax]).max())
-        if moment is not None:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                shift = _knot_values(moment, t) / W
-            what, key = "its pressure centre M/W", f"load.{mkey}"
-        else:
-            if geo.shape == "flat_punch":
-                continue          # a tilted punch lifts on one side: a valid contact
-            radius = geo.radius if geo.shape == "sphere" else geo.radii[ax]
-            shift = radius * _knot_values(rotation, t)
-            what, key = "the contact, by R phi,", f"load.{rkey}"
-        k = int(np.nanargmax(np.abs(shift))) if np.isfinite(shift).any() else None
-        if k is None:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            shift = _knot_values(moment, t) / W
+        if not np.isfinite(shift).any() and not np.isinf(shift).any():
             continue
+        k = int(np.nanargmax(np.abs(shift)))
         e = float(shift[k])
-        value = show(float(_knot_values(moment if moment is not None else rotation, t)[k]))
-        if geo.shape == "flat_punch":
-            if abs(e) >= geo.radius:
-                problems.append(
-                    f"{key} = {value} at t = {t[k]:g} s puts {what} at {e:.4g} m along "
-                    f"{name}, beyond the flat punch's radius {geo.radius:g} m: the punch "
-                    f"would tip and the contact open; keep |M/W| below the radius")
-            continue
-        if abs(e) + semi[ax] > half:
+        if abs(e) >= geo.radius:
             problems.append(
-                f"{key} = {value} at t = {t[k]:g} s moves {what} {e:.4g} m along {name}: "
-                f"with its Hertz semi-axis {semi[ax]:.4g} m the contact would leave the grid "
-                f"(cells up to {half:.4g} m from the centre) and open at its edge; keep the "
-                f"shift below {max(half - semi[ax], 0.0):.4g} m or enlarge grid.size")
+                f"load.{mkey} = {show(float(_knot_values(moment, t)[k]))} at t = {t[k]:g} s "
+                f"puts its pressure centre M/W at {e:.4g} m along {('x1', 'x2')[ax]}, beyond "
+                f"the flat punch's radius {geo.radius:g} m: the punch would tip and the "
+                f"contact open; keep |M/W| below the radius")
+
+
+def _reach_why(geo, load, window) -> str:
+    """Where the estimate of the contact's size comes from, for messages."""
+    if geo.shape == "flat_punch":
+        return "the flat punch's radius"
+    if load.normal_approach is not None:
+        return "a = sqrt(R omega3) under the largest load.normal_approach"
+    t, W = load.knots()[:2]
+    k = int(np.argmax(W))
+    return (f"the Hertz semi-axis of the largest load.normal_force, W = {W[k]:g} N at "
+            f"t = {t[k]:g} s, with each body's largest creep factor over the {window:g} s "
+            f"window")
+
+
+def _check_reach(p, problems):
+    """A fixed grid must hold the largest contact of the program (:func:`contact_reach`,
+    a tilt's shift included) a cell inside its edge: decided here from the estimate, not
+    at the step where the contact would reach the edge. ``grid.size_check = false``
+    leaves it to the run (a :class:`~contactpipe.GridError` at that step)."""
+    geo, grid, load = p["geometry"], p["grid"], p["load"]
+    if geo is None or grid is None or load is None or grid.size_check is False:
+        return
+    if geo.shape == "surface" or p["indenter"] is None or p["halfspace"] is None:
+        return
+    reach = contact_reach(geo, p["indenter"], p["halfspace"], load)
+    size = grid.size if grid.size != "auto" else \
+        auto_grid_size(geo, p["indenter"], p["halfspace"], load)
+    if not all(math.isfinite(r) for r in reach + tuple(size)):
+        return                  # an estimate out of range: refused by _check_grid for "auto"
+    allowed = [L / 2 - L / n for L, n in zip(size, grid.points)]
+    over = [ax for ax in (0, 1) if reach[ax] > allowed[ax]]
+    if not over:
+        return
+    need = [r / (0.5 - 1.0 / n) for r, n in zip(reach, grid.points)]
+    need = [max(n, L) for n, L in zip(need, size)]
+    ax = over[0]
+    name = ("x1", "x2")[ax]
+    shifts = contact_shifts(geo, load)
+    fix = (f"give grid.size = [{need[0]:.4g}, {need[1]:.4g}] m or more, or \"auto\" "
+           f"(grid.size_check = false leaves it to the run)")
+    edge = (f"past the {allowed[ax]:.4g} m the grid allows (its half-side less one cell: "
+            f"the contact must stay a cell inside the edge, or it opens there)")
+    semi = reach[ax] - shifts[ax][0]
+    if shifts[ax][0] > 0:
+        _shift, key, value, tk, e = shifts[ax]
+        what = "its pressure centre M/W" if key.startswith("load.moment") else \
+            "the contact, by R phi,"
+        problems.append(
+            f"{key} = {show(value)} at t = {tk:g} s moves {what} {e:.4g} m along {name}: "
+            f"with its Hertz semi-axis {semi:.4g} m the contact would reach "
+            f"{reach[ax]:.4g} m from the centre, {edge}; keep the shift below "
+            f"{max(allowed[ax] - semi, 0.0):.4g} m, or {fix}")
+        return
+    shown = show([float(x) for x in grid.size]) if grid.size != "auto" else "'auto'"
+    problems.append(
+        f"grid.size = {shown} m is too small for grid.points = "
+        f"{show(list(grid.points))}: the largest contact is estimated to reach "
+        f"{reach[ax]:.4g} m from the centre along {name} ({_reach_why(geo, load, load.window)}), "
+        f"{edge}; {fix}")
 
 
 def _knot_values(values, t):
@@ -671,8 +769,9 @@ class Scene:
 
     def resolved_grid_size(self):
         """Grid side lengths (L1, L2) [m]: as given, or for ``size = "auto"`` a Hertz
-        estimate of the largest contact over the window with margin 1.5 on the radius
-        (side = 3 a_max; a flat punch: 2.5 radius; :func:`auto_grid_size`)."""
+        estimate of the largest contact over the window with margin 1.5 on its reach
+        (side = 3 (a_max + a tilt's shift); a flat punch: 2.5 radius;
+        :func:`auto_grid_size`)."""
         if self.grid.size != "auto":
             return tuple(self.grid.size)
         with np.errstate(all="ignore"):

@@ -718,10 +718,16 @@ class Grid(Part):
     size : (float, float) or "auto"
         Full side lengths (L1, L2) [m], or "auto" for a Hertz estimate
         (:meth:`Scene.resolved_grid_size`).
+    size_check : bool, optional
+        Absent (true): a scene whose estimated largest contact would not stay a cell
+        inside a given size is refused (:func:`contactpipe.scene.contact_reach`). False:
+        no such check; the run stops with a GridError at the step whose contact reaches
+        the edge. True is stored as absent.
     """
 
     points: tuple
     size: tuple | str
+    size_check: bool | None = None
 
     PATH = "grid"
     FIELDS = (
@@ -732,7 +738,15 @@ class Grid(Part):
                                  "[L1, L2] the full side lengths, or 'auto'",
               ok=lambda x: MIN_SIDE <= x <= MAX_SIDE, length=2, options=("auto",),
               required=True, unit="m"),
+        Field("size_check", "bool"),
     )
+
+    @classmethod
+    def read(cls, raw, path, problems):
+        grid = super().read(raw, path, problems)
+        if grid is not None and grid.size_check is True:
+            object.__setattr__(grid, "size_check", None)      # the default, stored absent
+        return grid
 
     def _size(self):
         if self.size == "auto":

@@ -64,12 +64,14 @@ def maxwell(young=E_GLASSY, poisson=NU_STEEL, relaxation_time=RELAXATION_TIME):
 # --------------------------------------------------------------------------- scenes
 def fretting_scene(n=128, steps=40, *, indenter=STEEL, halfspace=STEEL, mu=MU,
                    amplitude=AMPLITUDE, window=1.0, cycles=1, size=3.0, W=W, name="fretting",
-                   solver=None, output=None, preload=None):
+                   solver=None, output=None, preload=None, grid_check=True):
     """The paper's fretting program on an n x n grid.
 
     ``size`` is the grid side in units of the steel Hertz radius a_H, a pair of side
     lengths [m], or "auto". ``preload``: "frictional" (the package default: friction acts
-    while W is applied) or "frictionless" (the paper's initial normal solve)."""
+    while W is applied) or "frictionless" (the paper's initial normal solve).
+    ``grid_check=False``: a grid the estimated contact does not fit is left to the run
+    (``grid.size_check = false``)."""
     if isinstance(size, (int, float)):
         size = [size * A_H, size * A_H]
     d = dict(name=name, geometry={"shape": "sphere", "radius": R},
@@ -78,6 +80,8 @@ def fretting_scene(n=128, steps=40, *, indenter=STEEL, halfspace=STEEL, mu=MU,
                    "fretting": {"amplitude": amplitude * mu * W, "window": window,
                                 "cycles": cycles}},
              grid={"points": [n, n], "size": size}, time={"steps": steps})
+    if not grid_check:
+        d["grid"]["size_check"] = False
     if preload:
         d["load"]["preload"] = preload
     if solver:

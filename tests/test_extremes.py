@@ -305,9 +305,27 @@ def test_gross_sliding_is_refused():
         build()
 
 
+def test_fixed_grid_too_small_for_a_long_window_is_refused_when_read():
+    """tau/t' = 100 on a grid sized for the glassy contact (3 a_H): phi_max = 101 gives a
+    contact 101^(1/3) = 4.66 times the glassy one, 2.33 a_H from the centre against the
+    1.5 a_H - 3 a_H / 32 = 1.41 a_H the grid allows: refused when the scene is built,
+    naming grid.size, the estimate and the size that would do."""
+    build, _ = ex.case_grid_too_small(size_check=True)
+    with pytest.raises(cp.SceneError) as err:
+        build()
+    text = str(err.value)
+    a_h = c.A_H
+    reach = 101 ** (1 / 3) * a_h
+    assert text.startswith("grid.size = [")
+    assert f"reach {reach:.4g} m from the centre along x1" in text, text
+    assert f"past the {1.5 * a_h - 3 * a_h / 32:.4g} m the grid allows" in text
+    need = reach / (0.5 - 1 / 32)
+    assert f"give grid.size = [{need:.4g}, {need:.4g}] m or more, or \"auto\"" in text
+
+
 def test_fixed_grid_too_small_for_a_long_window_raises_grid_error(tmp_path):
-    """tau/t' = 100 on a grid sized for the glassy contact (3 a_H): GridError at step 1
-    naming the step and the remedy; nothing written."""
+    """tau/t' = 100 on a grid sized for the glassy contact (3 a_H), the size check left
+    to the run: GridError at step 1 naming the step and the remedy; nothing written."""
     build, _ = ex.case_grid_too_small()
     path = tmp_path / "small.nc"
     with pytest.raises(cp.GridError, match=r"step 1 .*edge of the grid.*auto"):

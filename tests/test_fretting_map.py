@@ -175,7 +175,7 @@ def test_derived_amplitude_parameters():
         delta_amplitude(make_scene(), 1e-6)
     with pytest.raises(SceneError, match="delta_ratio must be a finite number > 0"):
         delta_ratio(base, -1.0)
-    flat = base.replace({"geometry": {"shape": "flat_punch", "radius": 2 * A_HERTZ}})
+    flat = base.replace({"geometry": {"shape": "flat_punch", "radius": A_HERTZ}})
     with pytest.raises(SceneError, match="needs a sphere"):
         delta_ratio(flat, 1.0)
 

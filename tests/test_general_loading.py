@@ -176,17 +176,22 @@ def test_both_keys_of_one_row(force, motion, what):
 @pytest.mark.parametrize("load, message", [
     ({"rotation2": 0.1},
      r"load\.rotation2 = 0\.1 at t = 0 s moves the contact, by R phi, 0\.0018 m along x1: "
-     r"with its Hertz semi-axis .* the contact would leave the grid .* and open at its "
-     r"edge; keep the shift below .* m or enlarge grid\.size"),
+     r"with its Hertz semi-axis .* the contact would reach .* m from the centre, past the "
+     r".* m the grid allows \(its half-side less one cell: the contact must stay a cell "
+     r"inside the edge, or it opens there\); keep the shift below .* m, or give grid\.size"),
+    # 32 cells over 4 a: the grid allows 2 a - 4 a / 32 = 0.9171 mm, the shift 0.428 mm;
+    # the least size 2 (a + e) / (1/2 - 1/32) = 2.750 mm along x2
     ({"moment1": [0.0, 0.8]},
      r"^load\.moment1 = 0\.8 at t = 1 s moves its pressure centre M/W 0\.0008 m along x2: "
-     r"with its Hertz semi-axis 0\.0004891 m the contact would leave the grid \(cells up "
-     r"to 0\.0009476 m from the centre\) and open at its edge; keep the shift below "
-     r"0\.0004585 m or enlarge grid\.size$"),
+     r"with its Hertz semi-axis 0\.0004891 m the contact would reach 0\.001289 m from the "
+     r"centre, past the 0\.0009171 m the grid allows \(its half-side less one cell: the "
+     r"contact must stay a cell inside the edge, or it opens there\); keep the shift below "
+     r"0\.000428 m, or give grid\.size = \[0\.001956, 0\.00275\] m or more, or \"auto\" "
+     r"\(grid\.size_check = false leaves it to the run\)$"),
 ])
 def test_a_tilt_that_would_open_the_contact(load, message):
     """Decided at validation from the Hertz estimate: the contact, moved by R phi (or by
-    e = M/W), would leave the grid and open at its edge."""
+    e = M/W), would come within a cell of the grid's edge and open there."""
     text = scene_error({"time": [0.0, 1.0], "normal_force": W, **load})
     assert re.search(message, text), text
 

@@ -24,9 +24,12 @@ CREEP = TINY_SCENES["creep"]
 def make_study(root: pathlib.Path, forces=(500.0, 1000.0), figures=None, reference=None,
                stress=None):
     """scenes/creep.toml, sweep.toml and pipeline.toml under ``root``; ``stress``: the
-    body of a [stress] table (TOML text)."""
+    body of a [stress] table (TOML text). A force too large for the grid is left to the
+    run (``grid.size_check = false``): its member fails with a GridError."""
     (root / "scenes").mkdir(parents=True, exist_ok=True)
-    (root / "scenes" / "creep.toml").write_text(CREEP)
+    scene = CREEP if max(forces) <= 1000.0 else CREEP.replace(
+        "size = [2.4e-3, 2.4e-3]", "size = [2.4e-3, 2.4e-3]\nsize_check = false")
+    (root / "scenes" / "creep.toml").write_text(scene)
     (root / "sweep.toml").write_text(textwrap.dedent(f"""
         base = "scenes/creep.toml"
         [axes]

@@ -29,6 +29,8 @@ def scene(indenter=STEEL, halfspace=STEEL, mu=MU, T=T_X1, steps=2, **over):
     load = {"time": [0.0, 1.0], "normal_force": W}
     if T is not None:
         load["tangential_force"] = T
+    if RUBBER in (indenter, halfspace):   # its contact outgrows the grid sized for steel
+        over.setdefault("grid", {"size": "auto"})
     return make_scene(indenter=dict(indenter), halfspace=dict(halfspace),
                       friction={"mu": mu}, load=load, time={"steps": steps}, **over)
 
