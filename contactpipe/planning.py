@@ -51,7 +51,7 @@ from .nomenclature import FIELD, VARIABLES, variables_for
 from .solver.window import LARGEST_SHARE, MARGIN, SIDE_STEP, SMALLEST_GRID
 
 __all__ = ["Plan", "plan", "pair_couples", "RULES", "Resources", "estimate_resources",
-           "available_memory", "check_resources"]
+           "available_memory", "check_resources", "check_time"]
 
 RULES = {
     "normal": ("polonsky_keer",),
@@ -224,6 +224,21 @@ WINDOWED_SUBSTEP = 0.2
 #: 58 / 70 / 79 against 20 / 23 / 28 pairs (2.8-3.0), the vector form's Gauss-Seidel
 #: passes 223 / 312 against 112 / 166 (1.9-2.0).
 COUPLING_FACTOR = {"none": 1.0, "scalar": 2.8, "vector": 1.9}
+#: What an FFT pair costs beyond its transforms (the solvers' element-wise work and the
+#: Python around it), for the estimate of the wall time [s]: 0.25 ms measured (64²
+#: fretting, 3.4 ms for 10.4 pairs a step; 16²-24² tiny scenes, 0.26-0.28 ms a pair).
+PAIR_COST_S = 2.5e-4
+#: A floor of one term of the direct history sum (a tabulated creep function: step k adds
+#: its k past increments, each a 3 N array): per term [s] and per float of it [s]
+#: (measured 2.3 µs at 16², 3-6 ns a float at 64² and 128²).
+DIRECT_TERM_S = 1.0e-6
+DIRECT_FLOAT_S = 1.0e-9
+#: The run time a scene may be estimated to take without ``solver.max_hours`` [h].
+DEFAULT_MAX_HOURS = 1.0
+#: Pairs a run spends against the floor count of :data:`PAIRS_PER_ROOT`, for the estimate
+#: (measured 1.6-2.8: 2.8 paper-maxwell 64², 2.4 tiny-fretting 24², 2.6 tiny-creep 64²,
+#: 1.6 the elastic paper loop 128², 40 steps each).
+TYPICAL_PAIRS = 2.5
 
 
 @dataclass(frozen=True)
@@ -240,12 +255,18 @@ class Resources:
     fft_pairs : float
         Estimated FFT pairs of the whole run (an order of magnitude).
     seconds : float
-        ``fft_pairs`` times the floor time of one FFT pair on the padded grid [s]: a
-        lower bound of the wall time.
+        ``fft_pairs`` times the floor time of one FFT pair on the padded grid, plus a
+        floor of the direct history sum [s]: a lower bound of the wall time.
+    estimated_seconds : float
+        The wall time to expect [s]: :data:`TYPICAL_PAIRS` times the pairs, each costing
+        its transforms' floor and :data:`PAIR_COST_S`, plus the direct history sum's
+        floor; the set-up (kernels, FFT plans) is left out.
     grid : tuple of int
         (N1, N2) the estimate is for.
     instants : int
         Instants the run computes.
+    history_terms : float
+        Terms of the direct history sum over the run (0 for creep laws of exponentials).
     """
 
     memory_bytes: int
@@ -254,6 +275,8 @@ class Resources:
     seconds: float = 0.0
     grid: tuple = (0, 0)
     instants: int = 0
+    estimated_seconds: float = 0.0
+    history_terms: float = 0.0
 
     def describe(self) -> str:
         """One line: the total and its three largest items."""
@@ -262,6 +285,15 @@ class Resources:
         return (f"{_fmt_bytes(self.memory_bytes)} ({items}) and at least "
                 f"{_fmt_seconds(self.seconds)} for {self.instants} instants on "
                 f"{self.grid[0]}x{self.grid[1]} cells")
+
+    def describe_time(self) -> str:
+        """One line: the time to expect, its floor and what it is made of."""
+        history = (f", a direct history sum of {self.history_terms:.3g} array terms"
+                   if self.history_terms else "")
+        return (f"about {_fmt_seconds(self.estimated_seconds)} (at least "
+                f"{_fmt_seconds(self.seconds)}: {self.instants} instants on "
+                f"{self.grid[0]}x{self.grid[1]} cells, {self.fft_pairs:.3g} FFT pairs"
+                f"{history})")
 
 
 def _fmt_bytes(n) -> str:
@@ -287,6 +319,17 @@ def _instants(scene) -> int:
     steps = scene.time.steps if scene.time.steps is not None else \
         len(scene.load.knots()[0]) - 1
     return int(steps) + 1
+
+
+def _direct_terms(bodies, memory, instants) -> float:
+    """Terms of the direct history sums over the run: step k sums its k past increments,
+    once per kernel part whose creep function is not of exponentials."""
+    if memory == "none":
+        return 0.0
+    parts = sum(1 for b in bodies if b.has_memory for c in b.part_creeps
+                if not isinstance(c, ExponentialCreep))
+    steps = float(instants - 1)
+    return parts * steps * (steps + 1.0) / 2.0
 
 
 def _memory_fields(bodies, memory, instants, n) -> int:
@@ -452,9 +495,13 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     peak = parts["kernel spectra"] + parts["base"] + max(
         parts["kernel set-up"], sum(v for k, v in parts.items()
                                     if k not in ("kernel spectra", "kernel set-up", "base")))
+    terms = _direct_terms(bodies, pl.memory, instants)
+    history = terms * (DIRECT_TERM_S + 3 * n * DIRECT_FLOAT_S)
+    fft = pairs * FFT_FLOOR_S * m * math.log2(max(m, 2))
     return Resources(memory_bytes=int(peak), parts=parts, fft_pairs=pairs,
-                     seconds=pairs * FFT_FLOOR_S * m * math.log2(max(m, 2)), grid=(n1, n2),
-                     instants=instants)
+                     seconds=fft + history, grid=(n1, n2), instants=instants,
+                     estimated_seconds=TYPICAL_PAIRS * (fft + pairs * PAIR_COST_S) + history,
+                     history_terms=terms)
 
 
 def _meminfo_available() -> int | None:
@@ -518,8 +565,10 @@ def available_memory() -> tuple[int | None, str]:
     return min(found)
 
 
-def check_resources(res: Resources, available: int | None = None) -> Resources:
-    """Refuse a run whose memory estimate exceeds the memory available.
+def check_resources(res: Resources, available: int | None = None,
+                    max_hours: float | None = None) -> Resources:
+    """Refuse a run whose memory estimate exceeds the memory available, or whose time
+    estimate exceeds the cap.
 
     Parameters
     ----------
@@ -527,6 +576,9 @@ def check_resources(res: Resources, available: int | None = None) -> Resources:
         From :func:`estimate_resources`.
     available : int, optional
         Bytes available; :func:`available_memory` when not given.
+    max_hours : float, optional
+        The cap on :attr:`Resources.estimated_seconds` [h] (the scene's
+        ``solver.max_hours``); :data:`DEFAULT_MAX_HOURS` when not given.
 
     Raises
     ------
@@ -537,7 +589,7 @@ def check_resources(res: Resources, available: int | None = None) -> Resources:
     if available is None:
         available, source = available_memory()
     if available is None or res.memory_bytes <= available:
-        return res
+        return check_time(res, max_hours)
     fix = ["fewer grid.points (memory grows with N1 x N2)"]
     if res.parts.get("output", 0) > res.memory_bytes / 3:
         fix.insert(0, "write the result to a file, a larger output.stride or "
@@ -547,3 +599,19 @@ def check_resources(res: Resources, available: int | None = None) -> Resources:
     raise SceneError(f"the run needs about {res.describe()}, but only "
                      f"{_fmt_bytes(available)} is available ({source}); use "
                      + " or ".join(fix))
+
+
+def check_time(res: Resources, max_hours: float | None = None) -> Resources:
+    """Refuse a run estimated to take longer than ``max_hours`` (the scene's
+    ``solver.max_hours``; :data:`DEFAULT_MAX_HOURS` when None) with one SceneError line
+    naming the estimate and the ``max_hours`` that would let it start."""
+    cap = DEFAULT_MAX_HOURS if max_hours is None else float(max_hours)
+    if res.estimated_seconds > cap * 3600.0:
+        lift = max(1, math.ceil(2.0 * res.estimated_seconds / 3600.0))
+        fix = "fewer time.steps or grid.points"
+        if res.history_terms:
+            fix += " or a creep law of exponentials (its time per step does not grow)"
+        raise SceneError(f"the run is estimated to take {res.describe_time()}, above the "
+                         f"cap solver.max_hours = {cap:g} h; set solver.max_hours = {lift} "
+                         f"(or more) to run it anyway, or use {fix}")
+    return res

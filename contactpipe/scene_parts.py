@@ -827,6 +827,10 @@ class Solver(Part):
         Ask for an accuracy preset: the grid points and time steps are then chosen by
         :func:`contactpipe.accuracy.resolve_accuracy` (replacing ``grid.points`` and
         ``time.steps``) and the choice is recorded in the archive.
+    max_hours : float, optional
+        The run time a run may be estimated to take [h], > 0; absent: 1 h
+        (:func:`contactpipe.planning.check_resources` refuses a longer one before it
+        starts).
     """
 
     tolerance: float = 1e-9
@@ -838,6 +842,7 @@ class Solver(Part):
     fft: str = "auto"
     threads: int = 1
     accuracy: str | None = None
+    max_hours: float | None = None
 
     PATH = "solver"
     FIELDS = (
@@ -854,6 +859,7 @@ class Solver(Part):
         Field("threads", "integer", _AT_LEAST_1, ok=_at_least_1, default=1,
               cap=MAX_THREADS, cap_why="FFT threads beyond the cores only slow it down"),
         Field("accuracy", "choice", options=ACCURACIES),
+        Field("max_hours", "number", "a finite number > 0 [h]", ok=_positive, unit="h"),
     )
 
 

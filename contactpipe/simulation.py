@@ -813,8 +813,9 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         ``path`` is empty, a directory, a device or another special file, or a file the
         scene reads; checked before any work.
     SceneError
-        The run would need more memory than is available
-        (:func:`contactpipe.planning.estimate_resources`), or the scene's constants
+        The run would need more memory than is available, or is estimated to take longer
+        than ``solver.max_hours`` (1 h when absent; :func:`contactpipe.planning.estimate_resources`,
+        checked before any work), or the scene's constants
         overflow the influence coefficients.
     ResumeLockedError
         Another process runs a resumable run of the same target; nothing is touched.
@@ -836,7 +837,8 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         path = check_output_path(path, "archive", inputs=_inputs(scene))
     scene, accuracy_note = resolve_accuracy(scene)
     pl = make_plan(scene, tangential=tangential, coupling=coupling)
-    check_resources(estimate_resources(scene, pl, in_memory=path is None))
+    check_resources(estimate_resources(scene, pl, in_memory=path is None),
+                    max_hours=scene.solver.max_hours)
     opts = (accuracy_note, on_step, progress, checkpoint_seconds, wall0)
     with signals_as_interrupt(only_default=True):
         if path is None:

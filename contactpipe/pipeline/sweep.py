@@ -131,10 +131,12 @@ import stat
 import sys
 import time
 
+from ..accuracy import resolve_accuracy
 from ..archive import open_archive
-from ..exceptions import ArchiveError, one_line
+from ..exceptions import ArchiveError, SceneError, one_line
 from ..files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
                      make_folder)
+from ..planning import check_time, estimate_resources
 from ..scene import Scene
 from .combine import open_member, open_sweep
 from .config import SweepFile, load_sweep_file, read_sweep_file
@@ -142,7 +144,7 @@ from .execute import SYNCHRONOUS, execute
 from .inputs import scene_digest
 from .manifest import (MANIFEST, new_manifest, previous_records, read_manifest,
                        write_manifest)
-from .members import MODES, Member, build_members, dim_names
+from .members import MODES, Member, build_members, dim_names, label_of
 from .parameters import (derived_parameters, register_parameter, relaxation_time,
                          tau_ratio, with_window)
 
@@ -330,6 +332,21 @@ def _resume(out_dir, by_digest: dict, previous: dict) -> tuple[list, list, list]
 
 # ------------------------------------------------------------------- the sweep
 
+def _check_run_times(members):
+    """Every member estimated to take longer than its ``solver.max_hours`` is refused
+    before any work (:func:`contactpipe.planning.check_time`; the memory is the worker's,
+    checked where it runs)."""
+    problems = []
+    for m in members:
+        try:
+            check_time(estimate_resources(resolve_accuracy(m.scene)[0]),
+                       m.scene.solver.max_hours)
+        except SceneError as err:
+            problems.append(f"member {label_of(m.values)}: {err}")
+    if problems:
+        raise SceneError(problems)
+
+
 def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=None,
           n_workers=None, threads_per_worker=1, progress=True, retries=0,
           shared_disk=None) -> SweepResult:
@@ -399,6 +416,7 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
     if not isinstance(base, Scene):
         base = Scene.from_toml(base)
     names, values, funcs, members = build_members(base, axes, mode)
+    _check_run_times(members)
     out_dir = out_dir.resolve()
     make_folder(out_dir)
     with exclusive_lock(out_dir / LOCK, "sweep", error=SweepLockedError):
