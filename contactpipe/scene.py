@@ -115,9 +115,12 @@ def hertz_semi_axes(geometry, indenter, halfspace, load, moduli: str = "window")
     with E the instantaneous (glassy) modulus [Pa]; an ellipsoid takes the equivalent
     radius R = sqrt(R1 R2) and a_i = a (R_i / R)^(2/3), whose axis ratio (R1/R2)^(2/3)
     is within 4 % of exact Hertz theory for R1/R2 <= 10. Flat punch: (R, R), the flat
-    end. Under approach control (``load.normal_approach``, largest value omega) the
-    contact is a_i = sqrt(R_i omega), whatever the moduli. Computed in logarithms: extreme
-    constants give 0 or inf, never a warning.
+    end. Under approach control (``load.normal_approach``, largest value omega, plus
+    R_i phi^2 / 2 of a rotation) the contact is a_i = sqrt(R_i omega), whatever the moduli.
+    The creep factor is that of the normal compliance (1 - nu)/G (``bulk = "elastic"``:
+    :attr:`contactpipe.materials.Body.normal_creep`). A tilt's shift of the contact is not
+    included (:func:`contact_reach` adds it). Computed in logarithms: extreme constants
+    give 0 or inf, never a warning.
 
     Parameters
     ----------
@@ -423,7 +426,7 @@ def _check_reach(p, problems):
     reach = contact_reach(geo, p["indenter"], p["halfspace"], load)
     size = grid.size if grid.size != "auto" else \
         auto_grid_size(geo, p["indenter"], p["halfspace"], load)
-    if not all(math.isfinite(r) for r in reach + tuple(size)):
+    if any(math.isnan(r) for r in reach) or not all(math.isfinite(L) for L in size):
         return                  # an estimate out of range: refused by _check_grid for "auto"
     allowed = [L / 2 - L / n for L, n in zip(size, grid.points)]
     over = [ax for ax in (0, 1) if reach[ax] > allowed[ax]]
@@ -441,6 +444,12 @@ def _check_reach(p, problems):
     semi = reach[ax] - shifts[ax][0]
     if shifts[ax][0] > 0:
         _shift, key, value, tk, e = shifts[ax]
+        if math.isinf(e):
+            problems.append(
+                f"{key} = {show(value)} at t = {tk:g} s meets load.normal_force W = 0 there: "
+                f"no normal force carries the moment (M/W is infinite); apply a moment only "
+                f"where W > 0")
+            return
         what = "its pressure centre M/W" if key.startswith("load.moment") else \
             "the contact, by R phi,"
         problems.append(
@@ -450,11 +459,11 @@ def _check_reach(p, problems):
             f"{max(allowed[ax] - semi, 0.0):.4g} m, or {fix}")
         return
     shown = show([float(x) for x in grid.size]) if grid.size != "auto" else "'auto'"
+    why = _reach_why(geo, load, load.window)
     problems.append(
         f"grid.size = {shown} m is too small for grid.points = "
         f"{show(list(grid.points))}: the largest contact is estimated to reach "
-        f"{reach[ax]:.4g} m from the centre along {name} ({_reach_why(geo, load, load.window)}), "
-        f"{edge}; {fix}")
+        f"{reach[ax]:.4g} m from the centre along {name} ({why}), {edge}; {fix}")
 
 
 def _knot_values(values, t):

@@ -197,3 +197,12 @@ def test_a_moment_refused_names_the_largest_shift_the_grid_allows():
     ok = scene(steel, steel, {"time": [0.0, 1.0], "normal_force": 1000.0, "moment1": 0.44},
                radius=0.018, points=32, size=[2e-3, 2e-3])
     assert ok.load.moment1 == 0.44
+
+
+def test_a_moment_where_no_normal_force_carries_it_is_refused():
+    steel = {"material": "elastic", "young": 210e9, "poisson": 0.3}
+    with pytest.raises(cp.SceneError, match=r"^load\.moment2 = 0\.1 at t = 1 s meets "
+                                            r"load\.normal_force W = 0 there: no normal force "
+                                            r"carries the moment"):
+        scene(steel, steel, {"time": [0.0, 1.0], "normal_force": [1000.0, 0.0],
+                             "moment2": [0.0, 0.1]}, radius=0.018, size=[2e-3, 2e-3])
