@@ -23,7 +23,8 @@ import numpy as np
 from .exceptions import SceneError
 from .gridded import coordinate_problems, coverage_problems, in_metres, variable_problems
 
-__all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface"]
+__all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface",
+           "surface_edge"]
 
 #: Units a netCDF ``gap`` variable may declare (absent is read as metres).
 _METRE = ("m", "meter", "metre", "meters", "metres")
@@ -248,3 +249,43 @@ def surface_gap(x1, x2, file):
                          f"{out.size} grid points; every value must be finite [m]")
     return out
 
+
+
+def surface_edge(file, x1, x2):
+    """The gap of a surface file on the grid's outermost cells, and its least value [m].
+
+    Cheap enough for a scene's validation: a ``.npy`` array is memory-mapped and only its
+    border read (its least value scans it once), a netCDF gap is interpolated on the four
+    edges alone. The file must be valid for the grid (:func:`check_surface`).
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray, numpy.ndarray, float)
+        The border cells' x1, x2 [m] and gap [m], and the least gap of the file [m].
+    """
+    x1, x2 = np.asarray(x1, dtype=float), np.asarray(x2, dtype=float)
+    path = os.fspath(file)
+    if _is_npy(path):
+        a = np.load(path, mmap_mode="r", allow_pickle=False)
+        low = float(np.min(a))
+        edges = [(x1[[0, -1]], x2, np.asarray(a[[0, -1], :], dtype=float)),
+                 (x1, x2[[0, -1]], np.asarray(a[:, [0, -1]], dtype=float))]
+    else:
+        import xarray as xr
+
+        with xr.open_dataset(path) as ds:
+            gap = ds["gap"].load().transpose("x1", "x2").sortby(["x1", "x2"]).astype(float)
+        low = float(gap.min())
+        lo1, hi1 = float(gap.x1[0]), float(gap.x1[-1])
+        lo2, hi2 = float(gap.x2[0]), float(gap.x2[-1])
+        edges = []
+        for e1, e2 in ((x1[[0, -1]], x2), (x1, x2[[0, -1]])):
+            e1c, e2c = np.clip(e1, lo1, hi1), np.clip(e2, lo2, hi2)
+            edges.append((e1, e2, np.asarray(gap.interp(x1=e1c, x2=e2c).values, dtype=float)))
+    xs1, xs2, hs = [], [], []
+    for e1, e2, h in edges:
+        g1, g2 = np.meshgrid(e1, e2, indexing="ij")
+        xs1.append(g1.ravel())
+        xs2.append(g2.ravel())
+        hs.append(h.ravel())
+    return np.concatenate(xs1), np.concatenate(xs2), np.concatenate(hs), low

@@ -573,7 +573,41 @@ def _check_grid(p, problems):
                                 f"{size} m, not finite and > 0; give grid.size = [L1, L2] "
                                 f"in m")
     elif geo.shape == "surface":
-        problems.extend(_geometry.check_surface(geo.file, *grid.coordinates()))
+        found = _geometry.check_surface(geo.file, *grid.coordinates())
+        problems.extend(found)
+        if not found and load is not None and grid.size_check is not False:
+            _check_surface_reach(geo, grid, load, problems)
+
+
+def _check_surface_reach(geo, grid, load, problems):
+    """A surface under ``load.normal_approach``: the contact of a paraboloid reaches where
+    the gap is its least value h0 plus half the approach beyond it (a^2 = R omega), exact
+    for a flat end too; an outermost cell of the grid within that (the tilts' rigid
+    rotation included) would be in contact, so the scene is refused. Under a force there
+    is no estimate: the run checks the edge."""
+    if load.normal_approach is None:
+        return
+    x1, x2, h, h0 = _geometry.surface_edge(geo.file, *grid.coordinates())
+    t = load.knots()[0]
+    omega = _knot_values(load.normal_approach, t)
+    tilt = [_knot_values(getattr(load, k), t) if getattr(load, k) is not None
+            else np.zeros(t.shape) for k in ("rotation1", "rotation2")]
+    for k in range(t.size):
+        if omega[k] <= h0:
+            continue
+        eff = h - tilt[0][k] * x2 - tilt[1][k] * x1 - h0
+        hit = np.flatnonzero(eff <= 0.5 * (omega[k] - h0))
+        if hit.size:
+            i = hit[int(np.argmin(eff[hit]))]
+            problems.append(
+                f"grid.size = {show([float(v) for v in grid.size])} m is too small for "
+                f"load.normal_approach = {omega[k]:.4g} m at t = {t[k]:g} s: at the grid's "
+                f"outermost cell ({x1[i]:.4g}, {x2[i]:.4g}) m the gap of geometry.file is "
+                f"{eff[i]:.4g} m above its least value, within half the approach beyond it "
+                f"({0.5 * (omega[k] - h0):.4g} m), where a paraboloid's contact reaches: "
+                f"the contact would reach the grid's edge; enlarge grid.size or lower the "
+                f"approach (grid.size_check = false leaves it to the run)")
+            return
 
 
 # ----------------------------------------------------------------------------- scene

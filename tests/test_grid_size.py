@@ -206,3 +206,40 @@ def test_a_moment_where_no_normal_force_carries_it_is_refused():
                                             r"carries the moment"):
         scene(steel, steel, {"time": [0.0, 1.0], "normal_force": [1000.0, 0.0],
                              "moment2": [0.0, 0.1]}, radius=0.018, size=[2e-3, 2e-3])
+
+
+# ------------------------------------------------------------------------- a surface
+
+def test_a_surface_under_an_approach_is_checked_at_its_edge(tmp_path):
+    """The steel sphere's paraboloid as a .npy surface (16 cells over 2 mm, R = 18 mm):
+    under an approach omega its contact reaches a = sqrt(R omega), where the gap is
+    omega / 2. With a = 1 mm the outermost cells (the nearest at 0.9396 mm) would be in
+    contact: refused; with a = 0.7 mm it runs without reaching the edge."""
+    from contactpipe.geometry import sphere_gap
+    from contactpipe.scene import Grid
+
+    steel = {"material": "elastic", "young": 210e9, "poisson": 0.3}
+    grid = Grid.make(points=(16, 16), size=(2e-3, 2e-3))
+    gap = tmp_path / "sphere.npy"
+    np.save(gap, sphere_gap(*grid.coordinates(), 0.018))
+
+    def surface(a, **kw):
+        return cp.Scene(geometry={"shape": "surface", "file": str(gap)}, indenter=steel,
+                        halfspace=steel, load={"time": [0.0, 1.0],
+                                               "normal_approach": [0.0, a * a / 0.018]},
+                        grid={"points": [16, 16], "size": [2e-3, 2e-3], **kw},
+                        time={"steps": 2})
+
+    with pytest.raises(cp.SceneError, match=r"^grid\.size = \[0\.002, 0\.002\] m is too "
+                                            r"small for load\.normal_approach = 5\.556e-05 m "
+                                            r"at t = 1 s: at the grid's outermost cell"):
+        surface(1e-3)
+    ds = cp.simulate(surface(0.7e-3))
+    assert ds.sizes["time"] == 3
+    # the contact radius sqrt(A / pi) within a cell (0.125 mm) of a = sqrt(R omega)
+    assert abs(math.sqrt(float(ds.contact_area[-1]) / math.pi) - 0.7e-3) < 0.125e-3
+    assert not np.any(ds.p.values[:, [0, -1], :] > 0)
+    assert not np.any(ds.p.values[:, :, [0, -1]] > 0)
+    left = surface(1e-3, size_check=False)
+    with pytest.raises(cp.GridError, match="edge of the grid"):
+        cp.simulate(left)
