@@ -423,6 +423,13 @@ def _check_reach(p, problems):
         return
     if geo.shape == "surface" or p["indenter"] is None or p["halfspace"] is None:
         return
+    if geo.shape == "flat_punch" and grid.size == "auto":
+        return                  # the punch's own end: its outermost cells' centres lie at
+        #                         1.09 radii or more for N >= 8, off the contact
+    for body in (p["indenter"], p["halfspace"]):
+        E, nu = getattr(body, "young", None), getattr(body, "poisson", None)
+        if E is not None and nu is not None and not 0 < E / (2 * (1 + nu)) < math.inf:
+            return              # a modulus that rounds to 0: refused with its own reason
     reach = contact_reach(geo, p["indenter"], p["halfspace"], load)
     size = grid.size if grid.size != "auto" else \
         auto_grid_size(geo, p["indenter"], p["halfspace"], load)
