@@ -11,8 +11,8 @@ slot           model(s)                                 needed when
 normal         ``polonsky_keer``                        always
 tangential     ``scalar`` (Cattaneo-Mindlin, q2 = 0)    μ > 0 and (a tangential load or
                                                         displacement, a twist, or coupling)
-               ``vector`` (disk |q| ≤ μp)               the same, and T2 ≠ 0 or ω2 ≠ 0 or a
-                                                        twist (M3 or φ3 given), or asked for
+               ``vector`` (disk |q| ≤ μp)               the same, and the scene makes q2 ≠ 0
+                                                        (:func:`q2_reasons`), or asked for
 coupling       ``gauss_seidel`` (normal ↔ tangential)   tangential model and the pair couples
                                                         (Dundurs β ≠ 0 at some instant)
 memory         ``recursive`` / ``direct``               a viscoelastic body and > 1 instant
@@ -26,11 +26,35 @@ uniform μ, an instant is solved as one problem over (p, q1) (one-component form
 slides as a whole, by block Gauss-Seidel passes. Both reach the same answer within the
 tolerance.
 
-With ``solver.tangential = "auto"`` the one-component form runs whenever the tangential
-load is along x1: the vector form spends 1.7-2.4 times its FFT pairs (``contactpipe bench
-fretting``), and it is exact for the Cattaneo-Mindlin and Mindlin-Deresiewicz cases. On a
-coupled pair (β ≠ 0) it neglects the x2 component of the shear that the coupling induces
-(Spence's radial shear during indentation); ask for ``"vector"`` to keep it.
+With ``solver.tangential = "auto"`` the one-component form (q2 = 0) runs only where the
+scene makes no x2 shear of its own (:func:`q2_reasons` lists what does; any one of them
+picks the vector form):
+
+* an x2 load: T2 or ω2 ≠ 0 at some knot; a twist (M3 or φ3 given); a tilt about x1
+  (M1 or φ1 ≠ 0 at some knot);
+* a scene without the mirror symmetry x2 → −x2: a friction map or a gap surface that
+  differs from its mirror image on the grid;
+* a coupled pair (β ≠ 0) whose pressure changes while friction holds: a frictional
+  preload, a normal load, approach, tilt moment or tilt that varies between knots, a
+  viscoelastic body (its pressure and its coupling creep under a constant load). The
+  in-plane displacement the pressure change makes is radial (K13, K23), and the stick
+  zone resists it with a radial shear, whose x2 part is as large as its x1 part
+  (Spence's problem: a rigid sphere pressed on a ν = 0 half-space with μ = 0.2986 reaches
+  a peak pressure 12.7 % lower in the one-component form, with 2.3 times the stick
+  cells, 45² cells, 35 stages; ``tests/test_spence.py``).
+
+What is left for the one-component form: T along x1 on a scene mirror-symmetric about
+x2 = 0, with β = 0, or with β ≠ 0 and the pressure set without friction (a
+``"frictionless"`` preload) and held (elastic bodies, constant W or ω3). By the mirror
+symmetry p and q1 are even in x2 and q2 odd, so q2 adds nothing to T2 or M3; it comes
+only from the in-plane Poisson term K21 ⊛ q1 (zero where both bodies have ν = 0, or
+are rigid) and, on a coupled pair, from the pressure that q1 itself moves (K23 ⊛ Δp,
+second order in β). Dropping those is the Cattaneo-Mindlin approximation the closed
+forms make: on the paper's fretting loop (48², 20 steps) the dropped q2 reaches 10-11 %
+of μp0 locally, and it moves q1 by at most 1.2 % of μp0, p by 0.2 % of p0 and ω1 by
+0.14 % (steel on steel; steel on aluminium and rigid on steel after a frictionless
+preload). The one-component form is cheaper (the vector form spends 1.7-2.4 times its
+FFT pairs, ``contactpipe bench fretting``); ``"vector"`` asks for the full form anywhere.
 """
 from __future__ import annotations
 
@@ -50,8 +74,8 @@ from .materials import ExponentialCreep
 from .nomenclature import FIELD, VARIABLES, variables_for
 from .solver.window import LARGEST_SHARE, MARGIN, SIDE_STEP, SMALLEST_GRID
 
-__all__ = ["Plan", "plan", "pair_couples", "RULES", "Resources", "estimate_resources",
-           "available_memory", "check_resources", "check_time"]
+__all__ = ["Plan", "plan", "pair_couples", "q2_reasons", "RULES", "Resources",
+           "estimate_resources", "available_memory", "check_resources", "check_time"]
 
 RULES = {
     "normal": ("polonsky_keer",),
@@ -103,6 +127,90 @@ def pair_couples(body1, body2) -> bool:
                 and body1.coupling_creep == body2.coupling_creep)
 
 
+def _row(prog, i):
+    """The program that drives freedom ``i``: its force, or its motion (NaN-free)."""
+    return prog.force[i] if prog.is_force(i) else prog.motion[i]
+
+
+def _varies(x) -> bool:
+    x = np.asarray(x, dtype=float)
+    return x.size > 1 and bool(np.any(x != x[0]))
+
+
+def _mirror_asymmetric(values) -> bool:
+    """A field on the grid (N1, N2) differs from its mirror image x2 -> -x2 (the grid's
+    cell centres are symmetric about x2 = 0, so the mirror is the flip of axis 1)."""
+    v = np.asarray(values, dtype=float)
+    if v.ndim != 2:
+        return False
+    scale = float(np.max(np.abs(v))) if v.size else 0.0
+    return not np.allclose(v, v[:, ::-1], rtol=1e-9, atol=1e-12 * scale)
+
+
+def _grid_fields_asymmetric(scene) -> list:
+    """The friction map and the gap surface that break the mirror symmetry x2 -> -x2;
+    a file that cannot be read on the grid here counts as breaking it."""
+    out = []
+    mapped, surface = scene.friction.mapped, scene.geometry.shape == "surface"
+    if not (mapped or surface):
+        return out
+    try:
+        x1, x2 = scene.resolved_grid().coordinates()
+    except (SceneError, TypeError, ValueError):
+        return (["friction.mu (a map)"] if mapped else []) + \
+            (["geometry.file (a surface)"] if surface else [])
+    for flag, key, field in ((mapped, "friction.mu (a map)", scene.friction.on_grid),
+                             (surface, "geometry.file (a surface)", scene.geometry.gap)):
+        if not flag:
+            continue
+        try:
+            asym = _mirror_asymmetric(field(x1, x2))
+        except (SceneError, OSError, ValueError):
+            asym = True
+        if asym:
+            out.append(f"{key} is not symmetric about x2 = 0")
+    return out
+
+
+def q2_reasons(scene) -> list:
+    """Why the scene makes an x2 shear (q2 ≠ 0) beyond the Cattaneo-Mindlin
+    approximation: one line per cause, empty when none (then ``"auto"`` runs the
+    one-component form). See the module's docstring for the argument.
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    list of str
+    """
+    load = scene.load
+    prog = load.programs()
+    why = []
+    tang = _row(prog, 1), _row(prog, 2)
+    if np.any(tang[1] != 0):
+        why.append("T2 or omega2 != 0 (a load along x2)")
+    if load.moment3 is not None or load.rotation3 is not None:
+        why.append("a twist (load.moment3 or load.rotation3)")
+    if np.any(_row(prog, 3) != 0):
+        why.append("a tilt about x1 (load.moment1 or load.rotation1 != 0)")
+    why += _grid_fields_asymmetric(scene)
+    b1, b2 = scene.indenter.body(), scene.halfspace.body()
+    if not pair_couples(b1, b2):
+        return why
+    # the pair couples: a pressure that changes while friction holds shears radially
+    normal = _row(prog, 0)
+    if load.preload == "frictional" and normal.size and normal[0] > 0:
+        why.append("a frictional preload on a coupled pair (Spence's radial shear)")
+    if any(_varies(_row(prog, i)) for i in (0, 3, 4)):
+        why.append("the normal load, approach or a tilt varies on a coupled pair")
+    steps = scene.time.steps if scene.time.steps is not None else prog.t.size - 1
+    if steps >= 1 and (b1.has_memory or b2.has_memory):
+        why.append("a viscoelastic body on a coupled pair (the pressure creeps)")
+    return why
+
+
 def plan(scene, tangential=None, coupling=None) -> Plan:
     """Infer the plan of a scene; optional overrides are checked against the scene.
 
@@ -133,8 +241,8 @@ def plan(scene, tangential=None, coupling=None) -> Plan:
         raise SceneError(f"{moduli}: a shear modulus rounds to 0 Pa or overflows; give "
                          "moduli of a material (1e3 to 1e13 Pa)") from None
     needs_tangential = mu > 0 and (has_T or couples)
-
     choice = tangential or scene.solver.tangential
+
     if choice not in RULES["tangential"] + ("auto",):
         raise SceneError(f"tangential={choice!r}: allowed 'auto', 'scalar', 'vector', 'none'")
     if not needs_tangential:
@@ -143,7 +251,7 @@ def plan(scene, tangential=None, coupling=None) -> Plan:
                              f"(mu = {mu}, no tangential load, no normal-tangential coupling)")
         tang = "none"
     elif choice == "auto":
-        tang = "vector" if has_T2 else "scalar"
+        tang = "vector" if q2_reasons(scene) else "scalar"
     elif choice == "none":
         raise SceneError("tangential='none': the scene carries shear (friction.mu > 0 with a "
                          "tangential load or a coupled pair); allowed: 'scalar', 'vector', 'auto'")

@@ -497,3 +497,38 @@ def test_lee_radok_pressure():
             at = float(an.lee_radok_sphere(tt, W_V, R_V, E_V, NU_V, creep).contact_radius)
             p = lambda x: an.lee_radok_pressure(x, tt, W_V, R_V, E_V, NU_V, creep)
             assert _force_axisym(p, at, a0) == pytest.approx(W_V, rel=1e-6)
+
+
+# --------------------------------------------------------------------------- Spence
+def test_spence_reference_is_the_flat_punch_without_coupling():
+    """β = 0, every ring stuck: no shear, and the load increment is the frictionless flat
+    punch's, P = 2/(π √(1 − r²)) per unit approach (units of 1/A), to 0.12 % over r < a/2
+    and 0.44 % over r < 0.9 a at 200 rings (measured)."""
+    from contactpipe.analytic.spence import spence_increments
+    r, P, Q, U = spence_increments(0.3, 0.0, 200, 200)
+    exact = 2.0 / (np.pi * np.sqrt(1.0 - r ** 2))
+    assert np.all(Q == 0) and np.all(U == 0)
+    assert np.abs(P / exact - 1)[r < 0.5].max() < 1.5e-3
+    assert np.abs(P / exact - 1)[r < 0.9].max() < 5e-3
+
+
+def test_spence_stick_ratio_limits_and_trend():
+    """λ = c/a: 0 without friction, 1 without coupling; grows with μ from near 0
+    (μ/|β| = 0.2: 0.015) to near 1 (μ/|β| = 8: 1.0); the sign of β does not matter."""
+    from contactpipe.analytic import spence_stick_ratio as lam
+    assert lam(0.0, 0.5) == 0.0 and lam(0.3, 0.0) == 1.0 and lam(np.inf, 0.3) == 1.0
+    values = [lam(m, -0.5) for m in (0.1, 0.15, 0.2, 0.2986, 0.4, 0.5, 1.0, 2.0, 4.0)]
+    assert values == [0.015, 0.09, 0.22, 0.5, 0.7, 0.815, 0.97, 0.995, 1.0]
+    assert lam(0.2986, 0.5) == lam(0.2986, -0.5)
+    with pytest.raises(ValueError, match="mu = -0.1"):
+        lam(-0.1, 0.5)
+    with pytest.raises(ValueError, match="beta = 0.6"):
+        lam(0.1, 0.6)
+
+
+def test_spence_stick_ratio_converges():
+    """The reference's λ at 50 and at 200 rings agree to 1/50 (one ring of the coarse
+    one; measured at most 0.005 apart), 400 rings were measured the same to 1/200."""
+    from contactpipe.analytic import spence_stick_ratio as lam
+    for mu in (0.1, 0.2, 0.2986, 0.4, 0.5, 1.0):
+        assert abs(lam(mu, 0.5, 50) - lam(mu, 0.5, 200)) <= 1 / 50 + 1e-12

@@ -25,8 +25,11 @@ T_X1 = [0.0, 0.5 * MU * W]
 T_X2 = [[0.0, 0.0], [0.3 * MU * W, 0.4 * MU * W]]
 
 
-def scene(indenter=STEEL, halfspace=STEEL, mu=MU, T=T_X1, steps=2, **over):
-    load = {"time": [0.0, 1.0], "normal_force": W}
+FRICTIONLESS = {"preload": "frictionless"}
+
+
+def scene(indenter=STEEL, halfspace=STEEL, mu=MU, T=T_X1, steps=2, load_keys=None, **over):
+    load = {"time": [0.0, 1.0], "normal_force": W, **(load_keys or {})}
     if T is not None:
         load["tangential_force"] = T
     if RUBBER in (indenter, halfspace):   # its contact outgrows the grid sized for steel
@@ -40,12 +43,30 @@ TABLE = [
     ("steel pair, T1", {}, ("scalar", "none", "none")),
     ("steel pair, T2", {"T": T_X2}, ("vector", "none", "none")),
     ("steel pair, no T", {"T": None}, ("none", "none", "none")),
-    ("steel on aluminium, T1", {"halfspace": ALUMINIUM}, ("scalar", "gauss_seidel", "none")),
+    # a coupled pair pressed with friction: Spence's radial shear, q2 as large as q1
+    ("steel on aluminium, T1", {"halfspace": ALUMINIUM}, ("vector", "gauss_seidel", "none")),
     ("steel on aluminium, T2", {"halfspace": ALUMINIUM, "T": T_X2},
      ("vector", "gauss_seidel", "none")),
-    # no tangential load, but the pair couples: Spence's shear under friction
     ("steel on aluminium, no T", {"halfspace": ALUMINIUM, "T": None},
+     ("vector", "gauss_seidel", "none")),
+    # pressed without friction and held: q2 only from K21 and K23 (Cattaneo-Mindlin)
+    ("steel on aluminium, T1, frictionless preload",
+     {"halfspace": ALUMINIUM, "load_keys": FRICTIONLESS}, ("scalar", "gauss_seidel", "none")),
+    ("steel on aluminium, no T, frictionless preload",
+     {"halfspace": ALUMINIUM, "T": None, "load_keys": FRICTIONLESS},
      ("scalar", "gauss_seidel", "none")),
+    ("steel on aluminium, frictionless preload, W varies",
+     {"halfspace": ALUMINIUM, "load_keys": {**FRICTIONLESS, "normal_force": [W, 2 * W]}},
+     ("vector", "gauss_seidel", "none")),
+    ("steel on aluminium, frictionless preload, M2 varies",
+     {"halfspace": ALUMINIUM, "load_keys": {**FRICTIONLESS, "moment2": [0.0, 1e-4 * W]}},
+     ("vector", "gauss_seidel", "none")),
+    ("steel pair, frictionless preload, W varies",
+     {"load_keys": {**FRICTIONLESS, "normal_force": [W, 2 * W]}}, ("scalar", "none", "none")),
+    ("steel pair, T1, tilt about x1", {"load_keys": {"moment1": 1e-4 * W}},
+     ("vector", "none", "none")),
+    ("steel pair, T1, tilt about x2", {"load_keys": {"moment2": 1e-4 * W}},
+     ("scalar", "none", "none")),
     ("steel on aluminium, mu = 0", {"halfspace": ALUMINIUM, "T": None, "mu": 0.0},
      ("none", "none", "none")),
     ("two incompressible, different E", {"indenter": INCOMPRESSIBLE, "halfspace": RUBBER},
@@ -54,19 +75,25 @@ TABLE = [
      ("scalar", "none", "none")),
     ("rigid on incompressible, no T", {"indenter": RIGID, "halfspace": RUBBER, "T": None},
      ("none", "none", "none")),
-    ("rigid on steel", {"indenter": RIGID}, ("scalar", "gauss_seidel", "none")),
+    ("rigid on steel", {"indenter": RIGID}, ("vector", "gauss_seidel", "none")),
+    ("rigid on steel, frictionless preload", {"indenter": RIGID, "load_keys": FRICTIONLESS},
+     ("scalar", "gauss_seidel", "none")),
+    # a coupled viscoelastic pair: the pressure and the coupling creep under a held load
     ("rigid on Maxwell (the paper)", {"indenter": RIGID, "halfspace": MAXWELL},
-     ("scalar", "gauss_seidel", "recursive")),
+     ("vector", "gauss_seidel", "recursive")),
+    ("rigid on Maxwell, frictionless preload",
+     {"indenter": RIGID, "halfspace": MAXWELL, "load_keys": FRICTIONLESS},
+     ("vector", "gauss_seidel", "recursive")),
     ("rigid on Maxwell, mu = 0", {"indenter": RIGID, "halfspace": MAXWELL, "T": None,
                                   "mu": 0.0}, ("none", "none", "recursive")),
     ("identical Maxwell pair", {"indenter": MAXWELL, "halfspace": MAXWELL},
      ("scalar", "none", "recursive")),
     ("Maxwell pair, different relaxation times",
-     {"indenter": MAXWELL, "halfspace": MAXWELL_SLOW}, ("scalar", "gauss_seidel", "recursive")),
+     {"indenter": MAXWELL, "halfspace": MAXWELL_SLOW}, ("vector", "gauss_seidel", "recursive")),
     ("rigid on tabulated creep", {"indenter": RIGID, "halfspace": TABULATED},
-     ("scalar", "gauss_seidel", "direct")),
+     ("vector", "gauss_seidel", "direct")),
     ("Maxwell on tabulated", {"indenter": MAXWELL, "halfspace": TABULATED},
-     ("scalar", "gauss_seidel", "direct")),
+     ("vector", "gauss_seidel", "direct")),
 ]
 
 
@@ -244,3 +271,36 @@ def test_pair_estimate_is_below_the_pairs_spent(halfspace, form):
     est = estimate_resources(sc, cp.plan(sc, tangential=form)).fft_pairs
     spent = float(cp.simulate(sc, tangential=form).fft_pairs.sum())
     assert 0.2 <= est / spent <= 1.0, (est, spent)
+
+
+def test_auto_reads_the_mirror_symmetry_of_maps_and_surfaces(tmp_path):
+    """A friction map or a gap surface on the grid: symmetric about x2 = 0, "auto" keeps
+    the one-component form (steel pair, T along x1); one that differs from its mirror
+    image (mu 0.1 / 0.2 on the two sides of x2 = 0; a sphere's gap tilted along x2)
+    needs the vector form, and q2_reasons names the file's key."""
+    import numpy as np
+    import xarray as xr
+
+    from contactpipe.planning import q2_reasons
+
+    base = scene(grid={"points": [16, 16]})
+    x1, x2 = base.resolved_grid().coordinates()
+    X1, X2 = np.meshgrid(x1, x2, indexing="ij")
+
+    def mu_map(name, values):
+        path = tmp_path / name
+        xr.Dataset({"mu": (("x1", "x2"), values)}, coords={"x1": x1, "x2": x2}).to_netcdf(path)
+        return str(path)
+
+    even = mu_map("even.nc", 0.1 + 0.1 * (np.abs(X2) > 2 * abs(x2[0])))
+    sides = mu_map("sides.nc", np.where(X2 > 0, 0.2, 0.1))
+    assert cp.plan(base.replace({"friction.mu": even})).tangential == "scalar"
+    odd = base.replace({"friction.mu": sides})
+    assert cp.plan(odd).tangential == "vector"
+    assert q2_reasons(odd) == ["friction.mu (a map) is not symmetric about x2 = 0"]
+    gap = (X1 ** 2 + X2 ** 2) / (2 * 0.018)
+    for name, values, form in (("round.npy", gap, "scalar"),
+                               ("tilted.npy", gap + 1e-3 * X2, "vector")):
+        np.save(tmp_path / name, values)
+        sc = base.replace({"geometry": {"shape": "surface", "file": str(tmp_path / name)}})
+        assert cp.plan(sc).tangential == form, name

@@ -27,6 +27,9 @@ Moments
     :func:`torsional_compliance`, :func:`torsional_stiffness`, :func:`full_slip_torque`,
     :func:`lubkin_torsion`, :func:`lubkin_moment` (torsion of spheres in partial slip),
     :func:`torsion_loop_moment` (any twist history, Masing's rules on Lubkin's curve).
+Frictional indentation of dissimilar bodies (Spence)
+    :func:`spence_stick_ratio` (the stick radius over the contact radius of a sphere
+    pressed with friction on a dissimilar body, constant while the load grows).
 Viscoelastic normal contact (rigid sphere, Lee-Radok)
     :func:`lee_radok_sphere`, :func:`lee_radok_radius`, :func:`relaxation_function`,
     :func:`lee_radok_pressure`.
@@ -49,6 +52,8 @@ References
    Int. J. Eng. Sci. 3 (1965) 47-57.
 .. [L51] J. L. Lubkin, "The torsion of elastic spheres in contact", J. Appl. Mech. 18
    (1951) 183-187 (and [J85]_ §7.4).
+.. [S75] D. A. Spence, "The Hertz contact problem with finite friction", J. Elasticity 5
+   (1975) 297-319 (and [J85]_ §5.2).
 .. [Ja98] J. Jaeger, "A new principle in contact mechanics", J. Tribol. 120 (1998)
    677-684 (superposition of Cattaneo distributions for load histories).
 """
@@ -64,6 +69,7 @@ from .mindlin import (CattaneoMindlin, cattaneo_mindlin, displacement_energy_per
                       stick_radius, tangential_displacement)
 from .torsion import (full_slip_torque, lubkin_moment, lubkin_torsion, torsion_loop_moment,
                       torsional_compliance, torsional_stiffness)
+from .spence import spence_stick_ratio
 from .lee_radok import (LeeRadokContact, lee_radok_pressure, lee_radok_radius,
                         lee_radok_sphere, relaxation_function)
 
@@ -82,5 +88,6 @@ __all__ = [
     "lubkin_moment", "torsion_loop_moment",
     "LeeRadokContact", "lee_radok_sphere", "lee_radok_radius", "relaxation_function",
     "lee_radok_pressure",
+    "spence_stick_ratio",
     "cell_average",
 ]
