@@ -157,14 +157,15 @@ def _grid_fields_asymmetric(scene) -> list:
     try:
         x1, x2 = scene.resolved_grid().coordinates()
     except (SceneError, TypeError, ValueError):
-        return (["friction.mu (a map)"] if mapped else []) + \
-            (["geometry.file (a surface)"] if surface else [])
-    for flag, key, field in ((mapped, "friction.mu (a map)", scene.friction.on_grid),
-                             (surface, "geometry.file (a surface)", scene.geometry.gap)):
+        return [f"{key}: its symmetry about x2 = 0 cannot be checked without the grid"
+                for key, flag in (("friction.mu (a map)", mapped),
+                                  ("geometry.file (a surface)", surface)) if flag]
+    for flag, key, on_grid in ((mapped, "friction.mu (a map)", scene.friction.on_grid),
+                               (surface, "geometry.file (a surface)", scene.geometry.gap)):
         if not flag:
             continue
         try:
-            asym = _mirror_asymmetric(field(x1, x2))
+            asym = _mirror_asymmetric(on_grid(x1, x2))
         except (SceneError, OSError, ValueError):
             asym = True
         if asym:

@@ -5,7 +5,9 @@ growing normal load, friction μ at the interface, no tangential load (Spence 19
 [S75]_; [J85]_ §5.2). The pressure moves the two surfaces radially by different amounts;
 friction resists it, with a radial shear: a central disk of radius c sticks, the annulus
 c < r < a slips with |q| = μp. Spence showed that c/a = λ stays constant while the load
-grows, and depends on μ/|β| alone.
+grows. It is governed by μ/|β| (the shear the coupling asks for over the shear friction
+allows), and, less, by |β| itself: the shear's own pull on the pressure is a β² term
+(at μ/|β| = 0.5972, λ = 0.50 for |β| = 1/2, 0.575 for 1/3, 0.595 for 1/4, 0.62 for 0.1).
 
 How λ is found here (the reduction is Spence's; the last step is numerical)
 ---------------------------------------------------------------------------
@@ -41,11 +43,15 @@ edge rings. λ is the edge of the smallest central set of stick rings for which 
 ring's shear opposes its slip (to 1/n), and |Q| <= μP is checked on its stick rings (the
 two conditions meet at the same ring).
 
-Checks (``tests/test_analytic.py``): without friction the flat punch's P = 2/(π √(1 − r²))
-(to 0.25 % over r < 0.5 at n = 100); λ → 0 as μ/|β| → 0 and λ → 1 as μ/|β| grows; λ
-converges in n (μ/|β| = 0.2, 0.5972, 1: 0.09 / 0.50 / 0.81 at n = 50 ... 400, within
-1/n). Spence's own tables were not at hand; at μ/|β| = 0.5972 (μ = 0.2986 on a rigid
-sphere and a ν = 0 half-space, β = −1/2) λ = 0.500.
+Checks (``tests/test_analytic.py``): without coupling the flat punch's
+P = 2/(π √(1 − r²)) (to 0.12 % over r < a/2 at n = 200); λ → 0 as μ/|β| → 0 and λ → 1
+as μ/|β| grows; λ converges in n (|β| = 1/2, μ/|β| = 0.4, 0.5972, 2: 0.22 / 0.50 / 0.96
+to 0.97 at n = 50 ... 400, within 1/n). Against the vector form of the solver
+(``tests/test_spence.py``): the stick radius within 0.5 cell of λ a while the load grows,
+at |β| = 1/2 (μ = 0.2, 0.2986, 0.4) and 1/3 (where λ = 0.575, not μ/|β|'s 0.50 at
+|β| = 1/2). Spence's own tables were not at hand; this is a numerical solution of his
+reduced problem, not his closed form. At μ = 0.2986 on a rigid sphere and a ν = 0
+half-space (β = −1/2), the issue's case, λ = 0.500.
 
 References
 ----------
@@ -61,7 +67,7 @@ import math
 import numpy as np
 from scipy import special
 
-__all__ = ["spence_stick_ratio", "spence_increments"]
+__all__ = ["spence_increments", "spence_stick_ratio"]
 
 #: Rings of the reference solution: λ to 1/200 (0.5 % of a).
 RINGS = 200
@@ -198,12 +204,12 @@ def spence_stick_ratio(mu, beta, n=RINGS) -> float:
 
     # the first stick disk whose slip rings all oppose: scanned up from a little below
     # the answer on a grid four times coarser (the answers agree to 1/50 from n = 50 on)
-    k = 0
+    start = 0
     if n >= 100:
-        k = max(0, round(n * spence_stick_ratio(mu, b, n // 4)) - 8)
-        while k > 0 and opposes(k)[0]:
-            k = max(0, k - 8)
-    for k in range(k, n + 1):
+        start = max(0, round(n * spence_stick_ratio(mu, b, n // 4)) - 8)
+        while start > 0 and opposes(start)[0]:
+            start = max(0, start - 8)
+    for k in range(start, n + 1):
         ok, P, Q = opposes(k)
         if ok:
             break
