@@ -510,6 +510,10 @@ def _failure(pb, k, T, res) -> ConvergenceError:
     twist = _twist_failure(pb, k, res)
     if twist is not None:
         return twist
+    if res.failed == "sliding":
+        return _sliding_failure(pb, k, res)
+    if not pb.program.is_force(0):            # approach control: W is the one reached
+        W = float(res.p.sum()) * pb.cell
     if res.failed == "tangential" and np.hypot(*T) >= 0.99 * mu * W > 0:
         return GrossSlidingError(
             f"step {k} (t = {tk:.6g} s): the stick zone was lost under "
@@ -519,10 +523,13 @@ def _failure(pb, k, T, res) -> ConvergenceError:
             f"force or refine the grid.")
     hint = ""
     if res.failed == "coupling":
-        hint = (f"; the normal-tangential passes did not settle in "
-                f"{res.passes} passes (strong coupling: large friction with "
-                f"Dundurs beta = {pb.beta:.2f}); raise "
-                f"solver.max_coupling_passes or take smaller load steps")
+        npass = f"{res.passes} pass" + ("es" if res.passes != 1 else "")
+        hint = (f"; the normal-tangential passes did not settle in {npass} (the last one "
+                f"left the pressure moving by {res.residual:.3g} of W; the pair couples "
+                f"with Dundurs beta = {pb.beta:.2f}, mu = {pb.scene.friction.largest:g})"
+                + ("; one pass cannot settle a coupled step, whose pressure change is "
+                   "measured by the next pass" if res.passes == 1 else "")
+                + "; raise solver.max_coupling_passes or take smaller load steps")
     rigid = (pb.op_first if k == 0 else pb.op_next).rigid
     if rigid and res.failed == "normal":
         hint += ("; this instant has no instantaneous elasticity (phi(0) = 0): only a "
@@ -542,6 +549,30 @@ def _failure(pb, k, T, res) -> ConvergenceError:
         f"{res.failed} problem at step {k} (t = {tk:.6g} s) stopped after "
         f"{res.iterations} iterations, residual {res.residual:.3g} > tolerance "
         f"{pb.limits.tol:g} ({_loads(pb, k)}){hint}")
+
+
+def _sliding_failure(pb, k, res) -> GrossSlidingError:
+    """A force-controlled T at or above what the bounds carry (μW, or Σμp Δ with a
+    friction map): gross sliding. Under approach control W is an outcome of the step, so
+    this is found only here; a scene under force control is refused before the run."""
+    W, T, capacity = res.sliding
+    mu = pb.scene.friction
+    what = (f"mu W = {capacity:.6g} N (mu = {mu.largest:g}, W = {W:.6g} N)"
+            if not mu.mapped else f"the sum of mu p = {capacity:.6g} N (W = {W:.6g} N)")
+    approach = not pb.program.is_force(0)
+    cause = ""
+    if approach:
+        cause = (f"; under load.normal_approach W is what the approach gives"
+                 + (": the contact is open at this instant (no cell centre lies within "
+                    "the approach; a grid too coarse for the contact also leaves it open)"
+                    if W <= 0.0 else ""))
+    fix = ("lower load.tangential_force, raise load.normal_approach, or impose the motion "
+           "(load.tangential_displacement)" if approach else
+           "lower load.tangential_force or impose the motion (load.tangential_displacement)")
+    return GrossSlidingError(
+        f"at step {k} (t = {pb.t[k]:.6g} s) the tangential force |T| = {T:.6g} N reaches "
+        f"{what}: gross sliding under force control has no static solution"
+        f"{cause}; {fix}")
 
 
 def _loads(pb, k) -> str:

@@ -106,6 +106,8 @@ def test_failures_name_the_sub_problem():
     res = solve_instant(op, gap, U, W, [T1, 0.0], cell, MU, plan, rest,
                         Tolerances(TOL, 2000, 1))
     assert not res.converged and res.failed == "coupling" and res.passes == 1
+    # the residual is the pressure change the next pass measured, not a placeholder
+    assert TOL < res.residual < 1.0
     # a tangential force above mu W: no shear within the bounds carries it (alone, the
     # one-component solver clipped q to mu p and carried mu W; the vector one gave NaN)
     for tangential in ("scalar", "vector"):
@@ -114,8 +116,9 @@ def test_failures_name_the_sub_problem():
             warnings.simplefilter("error", RuntimeWarning)
             res = solve_instant(op, gap, U, W, [1.5 * MU * W, 0.0], cell, MU, plan, rest,
                                 LIMITS)
-        assert not res.converged and res.failed == "tangential"
-        assert res.residual == pytest.approx(0.5, rel=1e-12)      # (|T| - mu W) / (mu W)
+        assert not res.converged and res.failed == "sliding"
+        assert res.residual == pytest.approx(1 / 3, rel=1e-12)    # (|T| - mu W) / |T|
+        assert res.sliding == pytest.approx((W, 1.5 * MU * W, MU * W), rel=1e-12)
 
 
 def test_the_previous_normal_solution_is_reused_as_is():
@@ -137,7 +140,9 @@ def test_simulate_names_the_failed_sub_problem():
                        grid={"points": [24, 24], "size": [4 * A_HERTZ, 4 * A_HERTZ]},
                        solver={"max_coupling_passes": 1})
     with pytest.raises(cp.ConvergenceError, match=r"^coupling problem at step 0 \(t = 0 s\)"
-                                                   r".*did not settle in 1 passes"):
+                                                   r".*did not settle in 1 pass \(the last "
+                                                   r"one left the pressure moving by "
+                                                   r"0\.\d+ of W"):
         cp.simulate(scene)
     scene = scene.replace({"solver.max_iterations": 2, "solver.max_coupling_passes": 100})
     with pytest.raises(cp.ConvergenceError, match=r"^normal problem at step 0 .* stopped "

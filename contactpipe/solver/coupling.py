@@ -187,6 +187,8 @@ class InstantResult:
     normal: NormalResult | None = None   # the last normal solve (reusable by the caller)
     phi: np.ndarray = field(default_factory=lambda: np.zeros(2))   # (φ1, φ2) reached [rad]
     dphi3: float = 0.0       # rotation increment Δφ3 [rad]
+    sliding: tuple | None = None   # failed "sliding": (W reached [N], |T| [N], the
+                                   # largest |T| the bounds carry, μW or Σμp Δ [N])
 
 
 class _Instant:
@@ -365,6 +367,17 @@ class _Instant:
         return u
 
 
+def _pressure_change(p_new, p, W, cell_area) -> float:
+    """Σ|Δp| Δ / W [1], the change of a coupling pass; where the contact opened under
+    approach control (W = 0), relative to the larger pressure's force instead (0 when
+    both are zero), so that it stays finite."""
+    moved = float(np.abs(p_new - p).sum()) * cell_area
+    if moved == 0.0:
+        return 0.0
+    size = W if W > 0.0 else max(float(p_new.sum()), float(p.sum())) * cell_area
+    return moved / size
+
+
 def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                   limits: Tolerances, controls: Controls | None = None) -> InstantResult:
     """Solve one instant of the coupled contact.
@@ -399,9 +412,11 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     -------
     InstantResult
         ``converged`` False with ``failed`` naming the sub-problem that stopped: "normal",
-        "tangential" (also when a force-controlled |T| > mu W (1 + tol): no shear within
-        the bounds carries it; ``residual`` is then (|T| - mu W) / (mu W)), or "coupling"
-        (the passes did not settle in ``limits.max_passes``). Under displacement control
+        "tangential", "sliding" (a force-controlled |T| > mu W (1 + tol): no shear within
+        the bounds carries it, gross sliding; ``residual`` is then (|T| - mu W) / |T| and
+        ``sliding`` holds W, |T| and mu W, W being the one reached under approach
+        control), or "coupling" (the passes did not settle in ``limits.max_passes``;
+        ``residual`` is the pressure change of the pass that would have followed). Under displacement control
         of the tangential freedoms full sliding (every contact cell at |q| = mu p) is a
         valid state, and under approach control so is a contact that opened (p = 0).
     """
@@ -430,9 +445,12 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         capacity = s.capacity(p, W)
         excess = float(np.hypot(*s.T)) - capacity
         if s.tang != "none" and excess > tol * capacity:
-            # no shear within the bounds mu p carries T: the contact slides as a whole
+            # no shear within the bounds mu p carries T: the contact slides as a whole.
+            # The residual is the excess relative to |T| (> 0 here), finite also where
+            # the pressure carries nothing (an approach that leaves the contact open)
             return InstantResult(p, q, U, n.omega3, domega, s.its, s.passes, False,
-                                 excess / max(capacity, 1e-300), "tangential", n)
+                                 excess / float(np.hypot(*s.T)), "sliding", n,
+                                 sliding=(W, float(np.hypot(*s.T)), capacity))
 
     # -- tangential, and the coupling loop ------------------------------------------------
     if s.tang != "none" and op.rigid:
@@ -448,16 +466,18 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         q = t_res.q
         domega, dphi3 = s.motions(t_res)
         while s.coupled:
-            s.passes += 1
-            if s.passes > limits.max_passes:
-                return InstantResult(p, q, U, n.omega3, domega, s.its, s.passes - 1, False,
-                                     change, "coupling", n)
+            # the next pass's normal solve measures how far the last one left the
+            # pressure: the residual of a step stopped by the pass limit
             n = s.normal(q, p, inner, Ap0=n.Ap)
             s.its += n.iterations
             if not n.converged:
                 return s.failure("normal", n, n.p, q, domega)
             W = s.W if ctl.is_force(0) else float(n.p.sum()) * cell_area
-            change = float(np.abs(n.p - p).sum()) * cell_area / max(W, 1e-300)
+            change = _pressure_change(n.p, p, W, cell_area)
+            if s.passes >= limits.max_passes:
+                return InstantResult(n.p, q, U, n.omega3, domega, s.its, s.passes, False,
+                                     change, "coupling", n)
+            s.passes += 1
             p = n.p
             last = inner == tol
             inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
