@@ -433,6 +433,10 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
         iterations += res.iterations
         passes += res.passes
         if not res.converged:
+            if np.all(np.isfinite(res.p)):
+                # a contact cut by the grid's edge is the cause (a solve may stall on it,
+                # e.g. a flat gap over the whole grid): say so rather than the stall
+                _check_edges(res.p, k, pb.t[k], pb.scene, stopped=res.failed)
             raise _failure(pb, k, T, res)
         _advance(pb, st, op, sub, U, res)
         _take_motions(pb, st, k, f, res)
@@ -527,8 +531,6 @@ def _failure(pb, k, T, res) -> ConvergenceError:
         hint = (f"; the normal-tangential passes did not settle in {npass} (the last one "
                 f"left the pressure moving by {res.residual:.3g} of W; the pair couples "
                 f"with Dundurs beta = {pb.beta:.2f}, mu = {pb.scene.friction.largest:g})"
-                + ("; one pass cannot settle a coupled step, whose pressure change is "
-                   "measured by the next pass" if res.passes == 1 else "")
                 + "; raise solver.max_coupling_passes or take smaller load steps")
     rigid = (pb.op_first if k == 0 else pb.op_next).rigid
     if rigid and res.failed == "normal":
@@ -602,7 +604,9 @@ def _twist_failure(pb, k, res):
         f"the moment, or impose the rotation (load.rotation3).")
 
 
-def _check_edges(p, k, tk, scene):
+def _check_edges(p, k, tk, scene, stopped=""):
+    """GridError where the pressure p reaches the grid's edge (``stopped``: the
+    sub-problem whose solve stopped with this p, named in the message)."""
     edge = np.concatenate([p[0], p[-1], p[:, 0], p[:, -1]])
     if np.any(edge > 0):
         load = scene.load
@@ -612,8 +616,10 @@ def _check_edges(p, k, tk, scene):
                f"the grid's edge)" if tilts else "")
         raise GridError(
             f"step {k} (t = {tk:.6g} s): the contact reached the edge of the grid "
-            f"(grid.size = {scene.grid.size}){why}; enlarge grid.size or set grid.size = "
-            f"\"auto\"")
+            f"(grid.size = {scene.grid.size}){why}"
+            + (f", and the {stopped} problem stopped short of its tolerance there"
+               if stopped else "")
+            + "; enlarge grid.size or set grid.size = \"auto\"")
 
 
 def _record(pb, st, W, T, iterations, passes, pairs) -> dict:

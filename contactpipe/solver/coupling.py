@@ -458,7 +458,10 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         if W > 0:
             q = np.stack([p * (s.T[0] / W), p * (s.T[1] / W)])
     elif s.tang != "none":
-        inner = max(tol, FIRST_PASS_TOLERANCE) if s.coupled else tol
+        # the pass before the last one allowed runs at the full tolerance, so that the
+        # last can settle the step (a pass settles only after one at the full tolerance)
+        inner = max(tol, FIRST_PASS_TOLERANCE) if s.coupled and limits.max_passes > 2 \
+            else tol
         t_res, up = s.tangential(p, q, inner, final=not s.coupled)
         s.its += t_res.iterations
         if not t_res.converged:
@@ -474,14 +477,19 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                 return s.failure("normal", n, n.p, q, domega)
             W = s.W if ctl.is_force(0) else float(n.p.sum()) * cell_area
             change = _pressure_change(n.p, p, W, cell_area)
-            if s.passes >= limits.max_passes:
+            last = inner == tol
+            if s.passes >= limits.max_passes and not (change < tol and last):
+                # (a pass that only confirms a settled pressure, and puts the shear on
+                # its bound, is not refused)
                 return InstantResult(n.p, q, U, n.omega3, domega, s.its, s.passes, False,
                                      change, "coupling", n)
             s.passes += 1
             p = n.p
-            last = inner == tol
             inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
-            final = change < tol and last
+            if s.passes >= limits.max_passes - 1:
+                inner = tol
+            # an open contact (p = 0: an approach that lifts it) leaves q = 0 exactly
+            final = (change < tol and last) or not p.any()
             t_res, up = s.tangential(p, q, inner, Aq0=t_res.Aq, final=final)
             s.its += t_res.iterations
             if not t_res.converged:

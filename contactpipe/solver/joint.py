@@ -92,6 +92,12 @@ class _Schedule:
     def __init__(self, tol):
         self.tol, self.inner, self.change = tol, max(tol, FIRST_PASS_TOLERANCE), np.inf
 
+    def last_allowed(self, passes, max_passes):
+        """The last pass allowed runs at the full tolerance: only such a pass can settle
+        (a limit of one pass or two would otherwise never let the step settle)."""
+        if passes >= max_passes:
+            self.inner = self.tol
+
     def settled(self, p_new, p, W, cell_area) -> bool:
         """Record a converged pass that moved p to ``p_new`` [Pa]; True when the passes
         end: a pass at the full tolerance moved p by less than it, or by so little that
@@ -158,6 +164,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     # a pass's start: from the second pass on, box_cg's ``follow``'s, whose product Ax is
     x, Ax, its, plan = np.stack([p, s]), None, 0, _Schedule(tol)
     for passes in range(1, max_passes + 1):
+        plan.last_allowed(passes, max_passes)
         lag = p                                   # the bound of s: |s| <= p (lagged)
         lo, hi = np.stack([zero, -lag]), np.stack([inf, lag])
         end = {}
@@ -288,6 +295,7 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
                                             plan.inner)])
     Ax, its = A(x), 0
     for passes in range(1, max_passes + 1):
+        plan.last_allowed(passes, max_passes)
         lag = x[0]                                # the bound of s: |s| <= p (lagged)
         end = {}
 
