@@ -435,6 +435,27 @@ def test_project_rows_is_the_euclidean_projection(seed, kind, m):
         assert np.all(np.hypot(P[0], P[1]) <= rho * (1 + 1e-12))
 
 
+@pytest.mark.parametrize("overshoot", [1e11, 1e13, 1e14])
+def test_rows_restored_exactly_after_a_far_overshoot(overshoot):
+    """The first step of a cold start overshoots far (a tilted sphere's normal solve on a
+    37 x 14 grid: two cells at ~1e11 Pa against a row target of 7.8e4 Pa); the
+    projection onto {p >= 0, Σp = f} must still meet the row to rounding of the result,
+    here 1e-13 of f (the dual iteration alone stopped at 1e-14 of Σ|y|: 9.2e-9 of f at
+    1e13, 1.6e-8 at 1e14, above the solver's tolerance 1e-9, and the CG, whose
+    directions keep C x, could never converge). The answer is the exact projection:
+    the largest cell takes all of f (the others' y are below the common shift)."""
+    shape = (37, 14)
+    f = 78236.79563938
+    x = np.zeros(shape)
+    x[18, 6], x[18, 7], x[3, 3] = 1.2 * overshoot, 0.9 * overshoot, 0.7 * overshoot
+    C = Constraints(np.ones((1,) + shape), [f])
+    lo, hi = np.zeros(shape), np.full(shape, np.inf)
+    out = C.restore(x, lo, hi, (x > lo) & (x < hi), lo < hi)
+    assert abs(out.sum() - f) <= 1e-13 * f
+    assert out[18, 6] == pytest.approx(f, rel=1e-13)
+    assert np.count_nonzero(out) == 1 and np.all(out >= 0.0)
+
+
 # --------------------------------------------------------------------------- preconditioned
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("kind, restore", [("two-sided", "shift"), ("one-sided", "scale")])
