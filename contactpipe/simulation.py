@@ -568,9 +568,10 @@ def _sliding_failure(pb, k, res) -> GrossSlidingError:
                  + (": the contact is open at this instant (no cell centre lies within "
                     "the approach; a grid too coarse for the contact also leaves it open)"
                     if W <= 0.0 else ""))
-    fix = ("lower load.tangential_force, raise load.normal_approach, or impose the motion "
-           "(load.tangential_displacement)" if approach else
-           "lower load.tangential_force or impose the motion (load.tangential_displacement)")
+    fix = ("lower load.tangential_force, raise load.normal_approach, or impose the "
+           "motion (load.tangential_displacement)" if approach else
+           "lower load.tangential_force or impose the motion "
+           "(load.tangential_displacement)")
     return GrossSlidingError(
         f"at step {k} (t = {pb.t[k]:.6g} s) the tangential force |T| = {T:.6g} N reaches "
         f"{what}: gross sliding under force control has no static solution"

@@ -621,10 +621,10 @@ def test_issue_ellipsoid_names_the_grid_not_an_overflow():
 def test_one_coupling_pass_settles_a_steady_step_and_reports_finite_changes():
     """Steel on aluminium (beta != 0), W = 1 kN, 24², mu = 0.1. A frictionless preload
     then the same W with friction: step 1 moves the pressure by less than the tolerance,
-    which one pass settles (was: 'residual inf'). A frictional preload needs passes: with 1, 2 or 3
-    allowed it stops with the pressure change the next pass measured, finite, each
-    pass cutting it by over 100 (Gauss-Seidel's contraction; measured 4.2e-3, 8.9e-6,
-    7.7e-8 of W)."""
+    which one pass settles (was: 'residual inf'). A frictional preload needs passes:
+    with 1, 2 or 3 allowed it stops with the pressure change the next pass measured,
+    finite, each pass cutting it by over 100 (Gauss-Seidel's contraction; measured
+    4.2e-3, 8.9e-6, 7.7e-8 of W)."""
     base = dict(indenter=dict(helpers.STEEL), halfspace=dict(ALUMINIUM),
                 friction={"mu": 0.1},
                 grid={"points": [24, 24], "size": [4 * helpers.A_HERTZ] * 2})

@@ -9,7 +9,9 @@ one normal and one tangential solve are exact and no loop runs.
 
 Inexact passes: while the pressure still moves by much more than the tolerance, the inner
 solves stop at a thousandth of that change (never looser than 1e-4, never tighter than the
-tolerance); the last passes run at the full tolerance. Warm starts carry their operator
+tolerance); the last passes run at the full tolerance, and so does the pass before the
+last one allowed (only a pass after one at the full tolerance can settle the instant; a
+pass limit of one or two would otherwise never settle). Warm starts carry their operator
 products (A p, A q) from pass to pass. This cuts the FFT pairs of a coupled
 step without changing its converged answer.
 
@@ -345,6 +347,19 @@ class _Instant:
             return self.mu * W
         return float(np.sum(self.mu * p)) * self.cell
 
+    def slides(self, n, q, W):
+        """The failed result "sliding" where no shear within the bounds μp of the
+        pressure n.p carries a force-controlled T (|T| above μW by more than the
+        tolerance): the contact slides as a whole. Its residual is the excess relative to
+        |T| (> 0 here), finite also where the pressure carries nothing (an approach that
+        leaves the contact open). None where the bounds carry T."""
+        capacity, T = self.capacity(n.p, W), float(np.hypot(*self.T))
+        excess = T - capacity
+        if excess <= self.lim.tol * capacity:
+            return None
+        return InstantResult(n.p, q, self.U, n.omega3, np.zeros(2), self.its, self.passes,
+                             False, excess / T, "sliding", n, sliding=(W, T, capacity))
+
     def failure(self, what, res, p, q, domega):
         return InstantResult(p, q, self.U, getattr(res, "omega3", 0.0), domega, self.its,
                              self.passes, False, res.residual, what)
@@ -416,9 +431,10 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         the bounds carries it, gross sliding; ``residual`` is then (|T| - mu W) / |T| and
         ``sliding`` holds W, |T| and mu W, W being the one reached under approach
         control), or "coupling" (the passes did not settle in ``limits.max_passes``;
-        ``residual`` is the pressure change of the pass that would have followed). Under displacement control
-        of the tangential freedoms full sliding (every contact cell at |q| = mu p) is a
-        valid state, and under approach control so is a contact that opened (p = 0).
+        ``residual`` is the pressure change of the pass that would have followed).
+        Under displacement control of the tangential freedoms full sliding (every
+        contact cell at |q| = mu p) is a valid state, and under approach control so is
+        a contact that opened (p = 0).
     """
     ctl = controls if controls is not None else Controls.forces(W, T)
     s = _Instant(op, gap, U, ctl, cell_area, mu, plan, previous, limits)
@@ -441,16 +457,10 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     W = s.W if ctl.is_force(0) else float(p.sum()) * cell_area
     domega, dphi3 = np.zeros(2), 0.0
     t_res, up = None, None
-    if ctl.is_force(1):
-        capacity = s.capacity(p, W)
-        excess = float(np.hypot(*s.T)) - capacity
-        if s.tang != "none" and excess > tol * capacity:
-            # no shear within the bounds mu p carries T: the contact slides as a whole.
-            # The residual is the excess relative to |T| (> 0 here), finite also where
-            # the pressure carries nothing (an approach that leaves the contact open)
-            return InstantResult(p, q, U, n.omega3, domega, s.its, s.passes, False,
-                                 excess / float(np.hypot(*s.T)), "sliding", n,
-                                 sliding=(W, float(np.hypot(*s.T)), capacity))
+    if ctl.is_force(1) and s.tang != "none":
+        slides = s.slides(n, q, W)
+        if slides is not None:
+            return slides
 
     # -- tangential, and the coupling loop ------------------------------------------------
     if s.tang != "none" and op.rigid:
