@@ -675,3 +675,22 @@ def test_approach_control_with_t_above_mu_w_names_gross_sliding():
     assert f"(mu = {mu:g}, W = " in text
     assert "gross sliding under force control has no static solution" in text
     assert "residual" not in text
+
+
+def test_a_solve_that_stops_on_a_contact_cut_by_the_grid_names_the_grid():
+    """A flat punch of radius 1.3 mm on 29 x 10 cells of 0.19 x 4.87 mm: no cell centre
+    lies on the flat end, so the gap is the punch's height in every cell and the whole
+    grid presses, edges included. A solve that stops there (here after
+    solver.max_iterations = 30; a random scene's stalled for 8362 iterations) is a
+    GridError naming the edge and the stopped normal problem, not a bare ConvergenceError
+    (was: 'normal problem ... stopped after 30 iterations, residual 6.86e-09')."""
+    scene = helpers.make_scene(
+        geometry={"shape": "flat_punch", "radius": 1.3e-3}, indenter={"material": "rigid"},
+        halfspace=dict(helpers.STEEL), load={"time": [0.0, 1.0], "normal_force": 1.0},
+        grid={"points": [29, 10], "size": [5.6e-3, 48.7e-3]},
+        solver={"max_iterations": 30, "fft": "scipy"})
+    assert 1.3e-3 < 0.5 * 48.7e-3 / 10                # below half a cell along x2
+    with pytest.raises(cp.GridError, match=r"^step 0 \(t = 0 s\): the contact reached the "
+                                           r"edge of the grid .*and the normal problem "
+                                           r"stopped short of its tolerance there"):
+        cp.simulate(scene)

@@ -228,6 +228,31 @@ def test_solve_vector_without_cross_terms_is_the_scalar_form(elastic):
     np.testing.assert_allclose(vec.domega, sca.domega, rtol=0, atol=1e-10 * g)
 
 
+@pytest.mark.parametrize("bound_scale", [0.0, 0.5])
+def test_a_force_the_bounds_cannot_carry_has_a_finite_residual(elastic, bound_scale):
+    """Elastic 6 x 6, |T| = C (the Hertz bound's capacity Σμp Δ) at 37°, on bounds
+    scaled to carry 0 (an open contact) or C/2. Both forms stop not converged with the
+    share of the force not carried, relative to the larger of Σμp and the force: the
+    one-component form (T1 = 0.8 C) exactly (0.8 − 0.5)/0.8 = 0.375, or 1 with no bound;
+    the vector form's worst row between 0.44 (a sum of |q| <= C/2 misses the (0.8, 0.6) C
+    row pair by at least C/(2√2) in one component, over 0.8 C) and 1, exactly 1 with no
+    bound. Was: residual 0.0 'above' the tolerance with no bound (and the coupling step
+    divided by the zero capacity: 2.85e+299)."""
+    rho = hertz_bound() * bound_scale
+    cap = float(hertz_bound().sum()) * AREA
+    T = cap * np.array([0.8, 0.6])
+    op = DenseOperator(elastic, (N, N))
+    b = np.zeros((2, N, N))
+    s = solve_scalar(op, b[0], rho, T[0], AREA, np.zeros((N, N)), 1e-9, 400)
+    v = solve_vector(op, b, rho, T, AREA, np.zeros((2, N, N)), 1e-9, 400)
+    assert not s.converged and not v.converged
+    if bound_scale == 0.0:
+        assert s.residual == 1.0 and v.residual == 1.0
+    else:
+        assert s.residual == pytest.approx(0.375, rel=1e-9)
+        assert 0.44 <= v.residual <= 1.0
+
+
 def test_warm_starts_and_iteration_cap(elastic):
     """Elastic 6 x 6, T = 0.5 Σμp Δ at 37°. Scalar form from its own solution with A q0:
     one iteration, one operator application, q unchanged to 1e-13 μp0 (measured 4e-14). Vector form from

@@ -479,18 +479,18 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         q = t_res.q
         domega, dphi3 = s.motions(t_res)
         while s.coupled:
-            # the next pass's normal solve measures how far the last one left the
-            # pressure: the residual of a step stopped by the pass limit
+            # the next pass's normal solve measures the change the last pass left
             n = s.normal(q, p, inner, Ap0=n.Ap)
             s.its += n.iterations
             if not n.converged:
                 return s.failure("normal", n, n.p, q, domega)
             W = s.W if ctl.is_force(0) else float(n.p.sum()) * cell_area
+            if ctl.is_force(1) and not ctl.is_force(0) and s.slides(n, q, W) is not None:
+                return s.slides(n, q, W)        # the approach's W fell below |T| / μ
             change = _pressure_change(n.p, p, W, cell_area)
             last = inner == tol
             if s.passes >= limits.max_passes and not (change < tol and last):
-                # (a pass that only confirms a settled pressure, and puts the shear on
-                # its bound, is not refused)
+                # (a pass that only confirms a settled pressure is not refused)
                 return InstantResult(n.p, q, U, n.omega3, domega, s.its, s.passes, False,
                                      change, "coupling", n)
             s.passes += 1

@@ -486,8 +486,10 @@ def _result(book, x, Ax, rho, con, pressure, err, tol, it):
     within tol; a converged solve that took no step to fold its end into (no descent was
     left) moves to ``follow``'s point, or takes in what it left out, by one product
     (:meth:`~contactpipe.solver.ledger.Ledger.close`)."""
-    miss = float(np.abs(con.residual(x[-2:])).max(initial=0.0)) / max(float(rho.sum()),
-                                                                      1e-300)
+    # relative to what the disks carry, or where they carry less than the rows ask (an
+    # open contact: rho = 0), to the rows' targets, so that it stays finite
+    miss = float(np.abs(con.residual(x[-2:])).max(initial=0.0)) / max(
+        float(rho.sum()), float(np.abs(con.target).max(initial=0.0)), 1e-300)
     if pressure is not None:
         miss = max(miss, abs(float(x[0].sum()) - pressure.target) / max(pressure.target,
                                                                          1e-300))

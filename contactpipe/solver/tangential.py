@@ -97,11 +97,12 @@ def scalar_multiplier(g, q1, bound) -> float:
     return float(slip_multipliers(g, q1, bound, None)[0])
 
 
-def _infeasible(x, con, target, scale, tol) -> bool:
-    """The rows are not met (a force beyond what the bounds can carry)."""
+def _miss(x, con, target, scale) -> float:
+    """How far the rows are from met, relative to ``scale`` (not within the tolerance:
+    a force beyond what the bounds can carry)."""
     if con is None:
-        return abs(float(x.sum()) - target) / scale >= tol
-    return float(np.abs(con.residual(x)).max(initial=0.0)) / scale >= tol
+        return abs(float(x.sum()) - target) / scale
+    return float(np.abs(con.residual(x)).max(initial=0.0)) / scale
 
 
 def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
@@ -138,7 +139,8 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
     ``converged`` is False when the bounds cannot carry T1 (|T1| > Σμp Δ), whichever of
     the CG or its projected-gradient fallback ran last.
     """
-    scale = max(float(bound.sum()), 1e-300)
+    # Σμp, or |T1|/Δ where the bounds carry less (then no solution: finite residuals)
+    scale = max(float(bound.sum()), abs(T1) / cell_area if T1 is not None else 0.0, 1e-300)
     con = Constraints.none(b1.shape) if T1 is None else None
     make = getattr(op, "shear_preconditioner", None) if precondition else None
     M = make() if make is not None else None
@@ -156,7 +158,8 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
             project = lambda y: project_box_sum(y, -bound, bound, target)  # noqa: E731
         x, Ax, its, err, ok = fista(op.tangential_scalar, b1, project, x0,
                                     op.tangential_norm(1), tol_, budget, scale, Ax0=Ax0)
-        return x, Ax, its, err, ok and not _infeasible(x, con, target, scale, tol_)
+        miss = _miss(x, con, target, scale)
+        return x, Ax, its, max(err, miss), ok and miss < tol_
 
     x, Ax, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
     lam = 0.0 if con is not None else scalar_multiplier(Ax + b1, x, bound)
@@ -197,7 +200,8 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True
     q = disk_start(q0, rho, con, tol)
     Aq = A(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
     res = disk_cg(A, b, q, Aq, rho, con, tol, max_iter, M, op.self_influence("11"),
-                  scale=max(float(rho.sum()), 1e-300), exact=exact)
+                  scale=max(float(rho.sum()), float(np.abs(con.target).max(initial=0.0)),
+                            1e-300), exact=exact)
     Aq = res.Ax
     if res.pending is not None and not res.converged:   # exact: none once converged
         Aq = Aq + A(res.pending)
@@ -384,7 +388,8 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
     met within the disks (|T| > Σμp Δ).
     """
     con = rows if rows is not None else force_rows(bound.shape, T, cell_area)
-    scale = max(float(bound.sum()), 1e-300)
+    # Σμp, or the rows' targets where the disks carry less (no solution: finite residuals)
+    scale = max(float(bound.sum()), float(np.abs(con.target).max(initial=0.0)), 1e-300)
 
     def cg(x0, Ax0, tol_, budget):
         r = _vector_cg(op, b, bound, con, x0, tol_, budget, Ax0, precondition, exact)
@@ -396,7 +401,8 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
             op.tangential_vector, b,
             lambda y: project_rows(np.where(cells, y, 0.0), con, cells, "disk", rho=bound),
             x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
-        return x, Ax, its, err, ok and not _infeasible(x, con, None, scale, tol_)
+        miss = _miss(x, con, None, scale)
+        return x, Ax, its, max(err, miss), ok and miss < tol_
 
     q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter,
                                             lambda q: sliding(q, bound))
