@@ -25,7 +25,7 @@ from contactpipe.files import exclusive_lock
 from contactpipe.nomenclature import variables_for
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.planning import check_resources, estimate_resources
-from contactpipe.testing import TINY_SCENES
+from contactpipe.testing import TINY_SCENES, assert_contact_laws
 
 import helpers
 
@@ -694,3 +694,29 @@ def test_a_solve_that_stops_on_a_contact_cut_by_the_grid_names_the_grid():
                                            r"edge of the grid .*and the normal problem "
                                            r"stopped short of its tolerance there"):
         cp.simulate(scene)
+
+
+def test_kelvin_voigt_under_a_frictionless_preload_on_a_coupled_pair():
+    """A rigid sphere on a Kelvin-Voigt half-space (nu = 0.3: the pair couples), W = 100 N
+    as a frictionless preload, 24² auto grid, 4 steps. At t0 the body has no
+    instantaneous elasticity, so the force goes to the cells of least gap (the 4 central
+    ones) and the rigid instant moves nothing in-plane; the contact then grows as the
+    body creeps (measured 164, 192, 208, 208 cells), W held and every contact law
+    holding. Was: a
+    TypeError from the rigid instant's missing coupling kernels."""
+    scene = helpers.make_scene(
+        indenter={"material": "rigid"},
+        halfspace={"material": "viscoelastic", "young": 1.0e9, "poisson": 0.3,
+                   "creep": "kelvin_voigt", "retardation_time": 0.2},
+        friction={"mu": 0.1},
+        load={"time": [0.0, 1.0], "normal_force": 100.0, "preload": "frictionless"},
+        grid={"points": [24, 24], "size": "auto"}, time={"steps": 4},
+        solver={"fft": "scipy"})
+    ds = cp.simulate(scene)
+    assert "coupling=gauss_seidel" in ds.attrs["models"]
+    assert_contact_laws(ds)
+    cell = float(np.prod(ds.attrs["grid_spacing_m"]))
+    p = ds["p"].values
+    np.testing.assert_allclose(p.sum(axis=(1, 2)) * cell, 100.0, rtol=1e-9)   # W held
+    cells = [int(np.count_nonzero(pk)) for pk in p]
+    assert cells[0] == 4 and cells[1] > 4 and cells == sorted(cells)
