@@ -534,10 +534,14 @@ def _failure(pb, k, T, res) -> ConvergenceError:
                 + "; raise solver.max_coupling_passes or take smaller load steps")
     rigid = (pb.op_first if k == 0 else pb.op_next).rigid
     if rigid and res.failed == "normal":
-        hint += ("; this instant has no instantaneous elasticity (phi(0) = 0): only a "
-                 "normal force without moments can be applied then, not an approach or a "
-                 "tilt")
-    elif not np.isfinite(res.residual):
+        return ConvergenceError(
+            f"normal problem at step {k} (t = {tk:.6g} s) has no solution "
+            f"({_loads(pb, k)}): this instant has no instantaneous elasticity (phi(0) = 0), "
+            f"so an approach or a tilt that closes a gap, or a moment, would need an "
+            f"infinite pressure; only a normal force without moments can be applied then: "
+            f"start the approach, tilt or moment from 0 at time[0], or apply "
+            f"load.normal_force")
+    if not np.isfinite(res.residual):
         hint += ("; the computation overflowed float64 (the forces, moduli or lengths of "
                  "the scene are beyond its range)")
     if res.failed == "normal" and pb.program.general:

@@ -165,18 +165,20 @@ def _bodies(draw, rigid):
         return {"material": "rigid"}
     body = {"material": kind, "young": draw(_log_uniform(1e6, 3e11)),
             "poisson": draw(st.one_of(st.sampled_from([0.0, 0.5]), st.floats(0.0, 0.5)))}
-    if kind == "viscoelastic":
+    if kind == "viscoelastic" and draw(st.integers(0, 3)):
         body.update(creep="maxwell", relaxation_time=draw(_log_uniform(1e-3, 10.0)))
+    elif kind == "viscoelastic":          # no instantaneous elasticity
+        body.update(creep="kelvin_voigt", retardation_time=draw(_log_uniform(1e-3, 10.0)))
     return body
 
 
 @st.composite
 def valid_scenes(draw):
     """Any valid scene of small size: a sphere, an ellipsoid or a flat punch; rigid,
-    elastic or Maxwell bodies of 1 MPa-300 GPa, any Poisson ratio; mu 0-0.6; W 0.01 N-
+    elastic, Maxwell or Kelvin-Voigt bodies of 1 MPa-300 GPa, any Poisson ratio; mu 0-0.6; W 0.01 N-
     10 kN or an approach within 3x of its Hertz value (so T may exceed mu W); T by
     knots, as a fretting preset or a tangential displacement; a tilt; 8-24 cells a side
-    over sides of 0.1 to 250 contact diameters each (cell aspect ratios to ~1e4), or
+    over sides of 0.3 to 250 contact diameters each (cell aspect ratios to ~1e3), or
     "auto"; 1-8 steps; 1-100 coupling passes. Scenes the checks refuse are skipped."""
     shape = draw(st.sampled_from(["sphere", "ellipsoid", "flat_punch"]))
     ind = draw(_bodies(True))
@@ -227,7 +229,7 @@ def valid_scenes(draw):
         key = draw(st.sampled_from(["rotation1", "rotation2"]))
         load[key] = min(a) / max(radii) * draw(st.floats(-0.3, 0.3))
     size = draw(st.one_of(st.just("auto"), st.tuples(
-        *[_log_uniform(0.2 * ai, 500 * ai) for ai in a]).map(list)))
+        *[_log_uniform(0.6 * ai, 500 * ai) for ai in a]).map(list)))
     points = [draw(st.integers(8, 24)), draw(st.integers(8, 24))]
     solver = {"fft": "scipy", "max_coupling_passes": draw(st.sampled_from([1, 2, 3, 100]))}
     try:
@@ -263,6 +265,9 @@ def check_converges_or_says_why(scene):
         except cp.ConvergenceError as err:
             text = str(err)
             assert "overflow" not in text, text
+            if " has no solution " in text:           # a rigid instant asked to move
+                assert "no instantaneous elasticity" in text and "residual" not in text
+                return
             found = re.search(r"residual (\S+) > tolerance (\S+) ", text)
             assert found, text
             residual, tol = float(found.group(1)), float(found.group(2))
@@ -276,11 +281,11 @@ def check_converges_or_says_why(scene):
             assert np.all(np.isfinite(var.values)), name
 
 
-@settings(max_examples=30)
+@settings(max_examples=40)
 @given(valid_scenes())
 def test_any_valid_scene_converges_or_says_why(scene):
-    """30 examples of any valid scene (issue 42: 43 of them once ended in a residual of
-    inf or 2.9e+299 blamed on float64's range). Measured: about 0.2 s each."""
+    """40 examples of any valid scene (issue 42: 43 of them once ended in a residual of
+    inf or 2.9e+299 blamed on float64's range). Measured: 0.003-0.7 s each."""
     check_converges_or_says_why(scene)
 
 

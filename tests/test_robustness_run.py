@@ -720,3 +720,33 @@ def test_kelvin_voigt_under_a_frictionless_preload_on_a_coupled_pair():
     np.testing.assert_allclose(p.sum(axis=(1, 2)) * cell, 100.0, rtol=1e-9)   # W held
     cells = [int(np.count_nonzero(pk)) for pk in p]
     assert cells[0] == 4 and cells[1] > 4 and cells == sorted(cells)
+
+
+def test_kelvin_voigt_under_approach_control_starts_from_rest_or_says_why():
+    """A rigid sphere on a Kelvin-Voigt half-space (no instantaneous elasticity), 24²,
+    4 steps over 1 s. An approach ramped from 0 to 20 µm is valid: at t0 nothing is
+    asked and nothing touches (p = 0, W = 0), after it W grows as the body creeps
+    (measured 6.4 to 27 N), the laws holding (was: 'normal problem ... residual inf').
+    An approach of 20 µm as a step at t0 has no solution (a rigid instant would need an
+    infinite pressure): one ConvergenceError saying so, without a residual."""
+    kv = {"material": "viscoelastic", "young": 1.0e9, "poisson": 0.5,
+          "creep": "kelvin_voigt", "retardation_time": 0.2}
+
+    def scene(approach):
+        return helpers.make_scene(
+            indenter={"material": "rigid"}, halfspace=kv, friction={"mu": 0.1},
+            load={"time": [0.0, 1.0], "normal_approach": approach},
+            grid={"points": [24, 24], "size": [4e-3, 4e-3]}, time={"steps": 4},
+            solver={"fft": "scipy"})
+
+    ds = cp.simulate(scene([0.0, 2e-5]))
+    assert_contact_laws(ds)
+    W = ds["W"].values
+    assert W[0] == 0.0 and np.all(np.diff(W) > 0.0)
+    assert not ds["p"].isel(time=0).values.any()
+    with pytest.raises(cp.ConvergenceError) as err:
+        cp.simulate(scene(2e-5))
+    text = str(err.value)
+    assert text.startswith("normal problem at step 0 (t = 0 s) has no solution "
+                           "(omega3 = 2e-05 m")
+    assert "no instantaneous elasticity" in text and "residual" not in text

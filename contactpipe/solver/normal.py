@@ -177,7 +177,9 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
     if op.rigid or (control is None and W <= 0.0):
         if control is None:
             return _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0)
-        return _rigid_motion(gap0, control)
+        # no compliance for this increment: only a force-controlled W has a meaning
+        # there, or nothing at all asked (no force, a motion that closes no gap)
+        return _rigid_rest(gap0, control)
     fast = {"precondition": op.normal_preconditioner() if precondition else None}
     coarse_its = 0
     if multilevel and not np.any(p0):
@@ -213,31 +215,27 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
                         res.residual, res.converged, phi=reached[1:].copy())
 
 
-def _rigid_motion(gap0, control):
-    """An instant without compliance (phi(0) = 0 on every body) under motion control.
-
-    Nothing can deform, so the imposed motions must leave every gap open or just closed
-    (a ramp of the approach from 0: the flat face touching) and the controlled forces
-    and moments be 0: then p = 0 is the answer, the force-controlled approach the one
-    that just touches, the free rotations 0. A motion that closes a gap would need an
-    infinite force (the scene refuses a step in the approach at t0) and a nonzero
-    controlled force other than W alone has no solution: not converged, residual inf.
-    """
-    X1, X2, L = control.arms()
+def _rigid_rest(gap0, control: NormalControl) -> NormalResult:
+    """The normal problem of an instant without compliance under general controls: p = 0
+    (converged) where every force-controlled freedom asks zero and the known motions
+    leave every gap open (a free ω3 then touches: the least gap); else no pressure can
+    answer (any closed gap asks an infinite one): not converged, with no residual
+    (NaN), the caller naming the cause."""
+    X1, X2, _ = control.arms()
     force, motion = np.asarray(control.force, float), np.asarray(control.motion, float)
-    b = np.array(gap0, dtype=float)
-    for i, f in enumerate((np.ones_like(gap0), X2, X1)):
-        if np.isnan(force[i]) and motion[i] != 0.0:
-            b = b - motion[i] * f
-    scale = max(float(np.abs(gap0).max()), abs(float(np.nan_to_num(motion[0]))), 1e-300)
+    known = np.where(np.isnan(motion), 0.0, motion)
+    h = gap0 - known[1] * X2 - known[2] * X1
+    free_approach = np.isnan(motion[0])
+    h_min = float(h.min())
     zero = np.zeros_like(gap0)
-    if np.any(np.nan_to_num(force) != 0.0) or b.min() < -1e-12 * scale:
-        return NormalResult(zero, np.nan, zero, 0, np.inf, False)
-    reached = np.where(np.isnan(force), motion, 0.0)
-    if not np.isnan(force[0]):
-        reached[0] = float(gap0.min())                   # the approach that just touches
-    return NormalResult(zero, float(reached[0]), zero, 0, 0.0, True,
-                        phi=reached[1:].copy())
+    asked = np.nan_to_num(force, nan=0.0)
+    scale = max(float(np.abs(gap0).max()), abs(float(known[0])), 1e-300)
+    if not np.any(asked) and (free_approach or h_min - known[0] >= -1e-12 * scale):
+        reached = np.where(np.isnan(motion), 0.0, motion)
+        reached[0] = h_min if free_approach else known[0]
+        return NormalResult(zero, float(reached[0]), zero, 0, 0.0, True,
+                            phi=reached[1:].copy())
+    return NormalResult(zero, np.nan, zero, 0, np.nan, False)
 
 
 def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0, precondition=None):
