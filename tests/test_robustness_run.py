@@ -750,3 +750,28 @@ def test_kelvin_voigt_under_approach_control_starts_from_rest_or_says_why():
     assert text.startswith("normal problem at step 0 (t = 0 s) has no solution "
                            "(omega3 = 2e-05 m")
     assert "no instantaneous elasticity" in text and "residual" not in text
+
+
+def test_a_moment_on_a_contact_one_cell_wide_converges():
+    """A rigid sphere (R = 46.4 mm) on a 76 MPa half-space, W = 723 N, M1 = -0.413 N m,
+    tilted by rotation2 = -0.0388 rad, on 9 x 38 cells of 266 x 2.33 mm: the contact is
+    one cell wide along x1 and two cells long, as many free cells as the force rows (W,
+    M1), and the CG's active set cycled between cell pairs (Σ|Δp| = 2 Σp at every step,
+    2000 iterations: 'normal problem ... residual 2'). The projected-gradient fallback
+    ends it: W and M1 reached to 1e-9, the pressure centre at M1/W."""
+    scene = helpers.make_scene(
+        geometry={"shape": "sphere", "radius": 0.04643979929216626},
+        indenter={"material": "rigid"},
+        halfspace={"material": "elastic", "young": 75998621.96315412, "poisson": 0.0},
+        load={"time": [0.0, 1.0], "normal_force": 722.9615772888106,
+              "moment1": -0.4132465727632563, "rotation2": -0.03883761879150109},
+        grid={"points": [9, 38], "size": [2.392623189594096, 0.08865769085942814]},
+        solver={"fft": "scipy"})
+    ds = cp.simulate(scene)
+    W, M1 = 722.9615772888106, -0.4132465727632563
+    np.testing.assert_allclose(ds["W"].values, W, rtol=1e-9)
+    np.testing.assert_allclose(ds["M1"].values, M1, rtol=1e-9)
+    p = ds["p"].values[-1]
+    x2 = ds["x2"].values
+    assert np.all(p >= 0.0)
+    assert (p.sum(axis=0) * x2).sum() / p.sum() == pytest.approx(M1 / W, rel=1e-9)

@@ -55,8 +55,8 @@ DAMPING = (1e-12, 1e4)
 POLISH = 1e-13
 
 __all__ = ["BlockSums", "BoxResult", "ComponentSums", "Constraints", "box_cg",
-           "feasible_start", "fista", "project_box_sum", "project_rows", "box_jacobian",
-           "box_project", "disk_jacobian", "disk_project"]
+           "cg_with_fallback", "feasible_start", "fista", "project_box_sum", "project_rows",
+           "box_jacobian", "box_project", "disk_jacobian", "disk_project"]
 
 
 @dataclass
@@ -833,6 +833,36 @@ def project_box_sum(y, lo, hi, target):
     c = _shift_root(ys, ls, hs, target - float(out[~movable].sum()))
     out[movable] = np.clip(ys + c, ls, hs)
     return out
+
+
+def cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter, sliding=None):
+    """CG first; where it stalls, the projected gradient to a loose tolerance (it finds the
+    slip/stick pattern that pins the multiplier), then CG again from there; the projected
+    gradient, which always converges, finishes if CG stalls a second time.
+
+    ``cg`` and ``pg`` take (x0, Ax0, tol, budget) and return (x, Ax, iterations, residual,
+    converged). Returns the same tuple, iterations summed. ``sliding(x)``, when given, says
+    that no cell of x sticks: the projected gradient then runs alone (the projected CG
+    stalls where every cell turns on its circle, as in gross slip, while the projected
+    gradient converges in a few dozen iterations there).
+    """
+    budget = max(1, max_iter // 4)
+    if sliding is not None and np.any(x0) and sliding(x0):
+        return pg(x0, Ax0, tol, max_iter)
+    x, Ax, its, err, ok = cg(x0, Ax0, tol, budget)
+    if ok:
+        return x, Ax, its, err, ok
+    x, Ax, more, err, _ = pg(x, Ax, max(tol, 1e-6), budget)
+    its += more
+    if sliding is not None and sliding(x):
+        x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
+        return x, Ax, its + more, err, ok
+    x, Ax, more, err, ok = cg(x, Ax, tol, budget)
+    its += more
+    if ok:
+        return x, Ax, its, err, ok
+    x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
+    return x, Ax, its + more, err, ok
 
 
 def fista(apply, b, project, x0, lipschitz, tol, max_iter, scale, Ax0=None):

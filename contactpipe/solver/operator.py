@@ -188,6 +188,14 @@ class ContactOperator:
             self._derived[key] = float(np.real(total))
         return self._derived[key]
 
+    def normal_norm(self):
+        """Largest value of K33's padded spectrum, an upper bound of the normal operator's
+        norm (the projected-gradient step; cached)."""
+        if ("norm", 0) not in self._derived:
+            m = self.conv.m1 * self.conv.m2
+            self._derived[("norm", 0)] = float(np.max(np.real(self.k["33"]))) * m
+        return self._derived[("norm", 0)]
+
     def tangential_norm(self, components=2):
         """Largest eigenvalue of the tangential kernel block over the padded spectrum, an
         upper bound of the operator's norm (the projected-gradient step; cached)."""

@@ -40,8 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import (ComponentSums, Constraints, box_cg, disk_project, fista, project_box_sum,
-                 project_rows)
+from .cg import (ComponentSums, Constraints, box_cg, cg_with_fallback as _cg_with_fallback,
+                 disk_project, fista, project_box_sum, project_rows)
 from .blocks import DirectOperator
 from .disk_cg import disk_cg, disk_start
 
@@ -222,36 +222,6 @@ def project_disks_sum(y, rho, target):
     cells = rho > 0
     con = force_rows(rho.shape, target, 1.0)
     return project_rows(np.where(cells, y, 0.0), con, cells, "disk", rho=rho)
-
-
-def _cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter, sliding=None):
-    """CG first; where it stalls, the projected gradient to a loose tolerance (it finds the
-    slip/stick pattern that pins the multiplier), then CG again from there; the projected
-    gradient, which always converges, finishes if CG stalls a second time.
-
-    ``cg`` and ``pg`` take (x0, Ax0, tol, budget) and return (x, Ax, iterations, residual,
-    converged). Returns the same tuple, iterations summed. ``sliding(x)``, when given, says
-    that no cell of x sticks: the projected gradient then runs alone (the projected CG
-    stalls where every cell turns on its circle, as in gross slip, while the projected
-    gradient converges in a few dozen iterations there).
-    """
-    budget = max(1, max_iter // 4)
-    if sliding is not None and np.any(x0) and sliding(x0):
-        return pg(x0, Ax0, tol, max_iter)
-    x, Ax, its, err, ok = cg(x0, Ax0, tol, budget)
-    if ok:
-        return x, Ax, its, err, ok
-    x, Ax, more, err, _ = pg(x, Ax, max(tol, 1e-6), budget)
-    its += more
-    if sliding is not None and sliding(x):
-        x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
-        return x, Ax, its + more, err, ok
-    x, Ax, more, err, ok = cg(x, Ax, tol, budget)
-    its += more
-    if ok:
-        return x, Ax, its, err, ok
-    x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
-    return x, Ax, its + more, err, ok
 
 
 def _multiplier(g, stick):
