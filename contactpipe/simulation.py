@@ -568,7 +568,7 @@ def _sliding_failure(pb, k, res) -> GrossSlidingError:
     approach = not pb.program.is_force(0)
     cause = ""
     if approach:
-        cause = (f"; under load.normal_approach W is what the approach gives"
+        cause = ("; under load.normal_approach W is what the approach gives"
                  + (": the contact is open at this instant (no cell centre lies within "
                     "the approach; a grid too coarse for the contact also leaves it open)"
                     if W <= 0.0 else ""))
