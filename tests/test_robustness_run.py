@@ -775,3 +775,29 @@ def test_a_moment_on_a_contact_one_cell_wide_converges():
     x2 = ds["x2"].values
     assert np.all(p >= 0.0)
     assert (p.sum(axis=0) * x2).sum() / p.sum() == pytest.approx(M1 / W, rel=1e-9)
+
+
+@pytest.mark.parametrize("nu, start", [(0.0, 0.0), (0.5, 0.0), (0.3, 5e-8)])
+def test_kelvin_voigt_under_a_tangential_displacement(nu, start):
+    """A rigid sphere on a Kelvin-Voigt half-space (nu = 0, 0.3: the pair couples; 0.5:
+    it does not), W = 10 N, mu = 0.5, the tangential displacement from `start` to 2 µm
+    over 4 steps, 24² auto grid, frictional preload. At t0 the body has no instantaneous
+    elasticity: a displacement that does not move leaves the shear at rest (T1 = 0), one
+    that moves makes the rigid instant slide as a whole (T1 = mu W exactly). After it the
+    body creeps and every contact law holds. Was: NaN shear refused by the archive
+    (q ∝ p T/W with T NaN under displacement control) or a TypeError (the coupling
+    kernels of the rigid instant)."""
+    scene = helpers.make_scene(
+        indenter={"material": "rigid"},
+        halfspace={"material": "viscoelastic", "young": 1.0e9, "poisson": nu,
+                   "creep": "kelvin_voigt", "retardation_time": 0.2},
+        friction={"mu": 0.5},
+        load={"time": [0.0, 1.0], "normal_force": 10.0,
+              "tangential_displacement": [start, 2e-6]},
+        grid={"points": [24, 24], "size": "auto"}, time={"steps": 4},
+        solver={"fft": "scipy"})
+    ds = cp.simulate(scene)
+    assert_contact_laws(ds)
+    T1 = ds["T1"].values
+    assert T1[0] == pytest.approx(0.5 * 10.0 if start else 0.0, rel=1e-12, abs=1e-12)
+    assert np.all(np.isfinite(ds["q1"].values)) and np.all(T1[1:] > 0.0)

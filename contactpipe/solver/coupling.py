@@ -347,6 +347,23 @@ class _Instant:
             return self.mu * W
         return float(np.sum(self.mu * p)) * self.cell
 
+    def rigid_shear(self, p, W, q):
+        """The shear of an instant without compliance (φ(0) = 0): any q within the bounds
+        that carries the force rows. Under force control of T, q ∝ p; under displacement
+        control the known rigid slip decides: q = μp along it where it is not zero (the
+        contact slides), else the previous shear q on its bound (nothing moves)."""
+        if self.ctl.is_force(1):
+            return np.stack([p * (self.T[0] / W), p * (self.T[1] / W)]) if W > 0 else q
+        _, known, _ = self.rows
+        bound = self.mu * p
+        mag = np.hypot(known[0], known[1])
+        if np.any(mag > 0.0):
+            out = np.where(mag > 0.0, bound / np.where(mag > 0.0, mag, 1.0), 0.0) * known
+        else:
+            out = np.where(bound > 0.0, q, 0.0)
+        size = np.hypot(out[0], out[1])
+        return out * np.where(size > bound, bound / np.where(size > 0.0, size, 1.0), 1.0)
+
     def slides(self, n, q, W):
         """The failed result "sliding" where no shear within the bounds μp of the
         pressure n.p carries a force-controlled T (|T| above μW by more than the
@@ -464,9 +481,7 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
 
     # -- tangential, and the coupling loop ------------------------------------------------
     if s.tang != "none" and op.rigid:
-        # no compliance: any q within the bounds carrying T; take q ∝ p
-        if W > 0:
-            q = np.stack([p * (s.T[0] / W), p * (s.T[1] / W)])
+        q = s.rigid_shear(p, W, q)
     elif s.tang != "none":
         # the pass before the last one allowed runs at the full tolerance, so that the
         # last can settle the step (a pass settles only after one at the full tolerance)
