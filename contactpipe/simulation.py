@@ -566,20 +566,15 @@ def _sliding_failure(pb, k, res) -> GrossSlidingError:
     what = (f"mu W = {capacity:.6g} N (mu = {mu.largest:g}, W = {W:.6g} N)"
             if not mu.mapped else f"the sum of mu p = {capacity:.6g} N (W = {W:.6g} N)")
     approach = not pb.program.is_force(0)
-    cause = ""
-    if approach:
-        cause = ("; under load.normal_approach W is what the approach gives"
-                 + (": the contact is open at this instant (no cell centre lies within "
-                    "the approach; a grid too coarse for the contact also leaves it open)"
-                    if W <= 0.0 else ""))
-    fix = ("lower load.tangential_force, raise load.normal_approach, or impose the "
-           "motion (load.tangential_displacement)" if approach else
-           "lower load.tangential_force or impose the motion "
-           "(load.tangential_displacement)")
+    open_ = (": the contact is open at this instant (no cell centre lies within the "
+             "approach; a grid too coarse for the contact also leaves it open)") * (W <= 0)
+    cause = "; under load.normal_approach W is what the approach gives" + open_
+    fix = ("lower load.tangential_force, " + "raise load.normal_approach, " * approach
+           + "or impose the motion (load.tangential_displacement)")
     return GrossSlidingError(
         f"at step {k} (t = {pb.t[k]:.6g} s) the tangential force |T| = {T:.6g} N reaches "
         f"{what}: gross sliding under force control has no static solution"
-        f"{cause}; {fix}")
+        f"{cause * approach}; {fix}")
 
 
 def _loads(pb, k) -> str:
