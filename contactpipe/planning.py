@@ -323,21 +323,22 @@ CHECK_BYTES = 16 * 2**20
 #: (pyFFTW, one thread: 0.44 ms at 128², 1.6 ms at 256², 10.6 ms at 512² on the 2-core
 #: machine of the README's speed table; the least of the three, 3.4e-10, is the floor).
 FFT_FLOOR_S = 3.4e-10
-#: FFT pairs of one instant, per fourth root of N, by model, from the README's speed table
-#: and fitted where the pairs grow least, so that ``seconds`` stays a lower bound: a cold
-#: normal solve 20 / 21 / 23 / 28 pairs at 64² ... 512² (28 / 22.6 = 1.2 N^(1/4) at 512²), a
-#: one-component fretting step 20 / 23 / 28 at 64² ... 256², the vector form 112 / 166 at
-#: 64² / 128² (14-15 N^(1/4); 8 leaves room for its preload, which costs fewer sub-steps'
-#: worth than it is counted with).
-PAIRS_PER_ROOT = {"none": 1.2, "scalar": 1.2, "vector": 8.0}
+#: FFT pairs of one instant, per fourth root of N, by model, fitted where the pairs grow
+#: least, so that ``seconds`` stays near a lower bound: a cold normal solve 20 / 21 / 23 /
+#: 28 pairs at 64² ... 512² (28 / 22.6 = 1.2 N^(1/4) at 512²), a one-component fretting
+#: step 10.4 / 12.2 at 64² / 128² (steel on steel), the vector form's 24.9 / 28.7 (2.5-3.1
+#: N^(1/4); `contactpipe bench fretting`, docs/design-choices.md D3).
+PAIRS_PER_ROOT = {"none": 1.2, "scalar": 1.2, "vector": 2.2}
 #: A preload sub-step on a window of its contact against an instant on the whole grid,
 #: at least (its window's share of the grid: 16.8 / 66 pairs per sub-step on paper fig. 3,
 #: 128², 36 / 67 steel on aluminium).
 WINDOWED_SUBSTEP = 0.2
-#: A coupled instant (β ≠ 0) against an uncoupled one, by tangential form: the joint solve
-#: 58 / 70 / 79 against 20 / 23 / 28 pairs (2.8-3.0), the vector form's Gauss-Seidel
-#: passes 223 / 312 against 112 / 166 (1.9-2.0).
-COUPLING_FACTOR = {"none": 1.0, "scalar": 2.8, "vector": 1.9}
+#: A coupled instant (β ≠ 0) against an uncoupled one, by tangential form: the scalar
+#: joint solve 42.6 / 46.5 against 10.4 / 12.2 pairs at 64² / 128² (steel on aluminium
+#: against steel on steel), the vector form 74.0 / 87.3 against 24.9 / 28.7 (3.0); both
+#: kept at 2.8 so that the coupled estimate stays below the pairs spent (vector/scalar
+#: 1.84 against 1.74-1.88 measured).
+COUPLING_FACTOR = {"none": 1.0, "scalar": 2.8, "vector": 2.8}
 #: What an FFT pair costs beyond its transforms (the solvers' element-wise work and the
 #: Python around it), for the estimate of the wall time [s]: 0.25 ms measured (64²
 #: fretting, 3.4 ms for 10.4 pairs a step; 16²-24² tiny scenes, 0.26-0.28 ms a pair).

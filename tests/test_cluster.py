@@ -98,7 +98,8 @@ def remote(tmp_path_factory):
         worker_env = dict(env, TMPDIR=str(worker_dir / "tmp"),
                           CONTACTPIPE_AUDIT_LOG=str(log),
                           CONTACTPIPE_AUDIT_WATCH=os.pathsep.join(
-                              [str(client_dir), str(worker_dir / "tmp")]))
+                              [str(client_dir), str(worker_dir / "tmp"),
+                               str(worker_dir / "local")]))
         worker = subprocess.Popen(
             [sys.executable, "-m", "dask", "worker", address, "--nworkers", "1",
              "--nthreads", "1", "--no-nanny", "--no-dashboard",
@@ -135,15 +136,20 @@ def test_sweep_on_workers_without_the_clients_disk(remote, monkeypatch):
     sw.close()
     assert not list(out.glob(".*.part*"))
 
-    # the worker never touched the output folder; it did work in its own TMPDIR
+    # the worker never touched the output folder; it did work in its own scratch folder
+    # under its dask local directory (where `dask worker --local-directory` puts it), not
+    # in the system temporary folder
     events = [line.split("\t") for line in log.read_text().splitlines()]
     under_out = [e for e in events if e[1].startswith(os.path.realpath(out))]
     assert under_out == [], under_out
-    in_tmp = [e for e in events if e[1].startswith(os.path.realpath(worker_tmp))]
-    assert any(e[0] == "os.rename" and e[1].endswith("member.nc") for e in in_tmp), \
-        "the audit hook saw no archive written in the worker's TMPDIR: " + repr(events[:20])
-    assert list(worker_tmp.iterdir()) == []          # its temporary folders are gone
-    assert not list((worker_dir / "local").rglob("*.nc"))
+    local = worker_dir / "local"
+    in_local = [e for e in events if e[1].startswith(os.path.realpath(local))]
+    assert any(e[0] == "os.rename" and e[1].endswith("member.nc") for e in in_local), \
+        "the audit hook saw no archive written in the worker's local directory: " + \
+        repr(events[:20])
+    assert not [e for e in events if e[1].startswith(os.path.realpath(worker_tmp))]
+    assert list(worker_tmp.iterdir()) == []
+    assert not list(local.rglob("*.nc")) and not list(local.glob("contactpipe-member-*"))
 
     # resuming is decided on the client: nothing to recompute
     again = sweep(base, axes, out, scheduler=address, progress=False)
