@@ -96,7 +96,7 @@ def _n_steps(scene):
 class _Problem:
     """What does not change during the march: grid, load program, operators, plan."""
 
-    def __init__(self, scene, pl, fft=None, threads=None):
+    def __init__(self, scene, pl, fft=None, threads=None, tuning=None):
         self.scene, self.plan, sv = scene, pl, scene.solver
         self.x1, self.x2, d1, d2 = grid_coordinates(scene)
         self.d1, self.d2 = d1, d2
@@ -114,7 +114,7 @@ class _Problem:
         #: the contact's growth exponent under load, where self-similar (solver.warm_start)
         self.similar = {"sphere": 1 / 3, "ellipsoid": 1 / 3}.get(scene.geometry.shape)
         self.X1, self.X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
-        self.limits = Tolerances(sv.tolerance, sv.max_iterations, sv.max_coupling_passes)
+        self.limits = Tolerances(sv.tolerance, sv.max_iterations, sv.max_coupling_passes, tuning)
         self.tang = pl.tangential != "none"
         self.bodies = (scene.indenter.body(), scene.halfspace.body())
         self.beta = float(dundurs_beta(*self.bodies))
@@ -804,7 +804,7 @@ def _inputs(scene):
         [scene.friction.mu if scene.friction.mapped else None]
 
 
-def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None,
+def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None, tuning=None,
              fft=None, threads=None, on_step=None, resume=False, checkpoint_seconds=30.0):
     """Run one scene; return its labelled :class:`xarray.Dataset` (docs/archive.md).
 
@@ -822,8 +822,8 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     tangential, coupling : str, optional
         Overrides of the inferred sub-models (:func:`contactpipe.planning.plan`), checked
         against the scene.
-    fft, threads : optional
-        Override ``solver.fft`` and ``solver.threads``.
+    fft, threads, tuning : optional
+        Override ``solver.fft``, ``solver.threads`` and the solver's switches (``Tuning``).
     on_step : callable, optional
         Called after every instant as ``on_step(k, t_k, record)`` with the instant's
         outputs (a dict of arrays and numbers, as written to the archive).
@@ -879,20 +879,21 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     opts = (accuracy_note, on_step, progress, checkpoint_seconds, wall0)
     with signals_as_interrupt(only_default=True):
         if path is None:
-            return _march(_Problem(scene, pl, fft, threads), None, None, *opts)
+            return _march(_Problem(scene, pl, fft, threads, tuning), None, None, *opts)
         try:
             make_folder(path.parent)
         except OSError as e:
             raise OutputPathError(f"archive {path}: cannot create its folder "
                                   f"({e.strerror or one_line(e)})") from None
         if not resume:
-            return open_archive(_march(_Problem(scene, pl, fft, threads), path, None, *opts))
+            pb = _Problem(scene, pl, fft, threads, tuning)
+            return open_archive(_march(pb, path, None, *opts))
         lock = resume_lock(path)
         with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
             ckpt = Checkpoint(path, scene.digest())
             ckpt.clean()                # what a run killed while checkpointing left
             try:
-                result = _march(_Problem(scene, pl, fft, threads), path, ckpt, *opts)
+                result = _march(_Problem(scene, pl, fft, threads, tuning), path, ckpt, *opts)
             finally:
                 lock.unlink(missing_ok=True)
         return open_archive(result)

@@ -8,21 +8,27 @@ replaces to within the tolerance.
 * the self-similar warm start of the preload's sub-steps
   (:mod:`contactpipe.solver.warm_start`) against the unstretched start;
 * the block force rows of the joint solve (:class:`BlockSums`) against their definitions;
-* the joint solve's deferred projection products (``joint.DEFER``) against exact ones.
+* the joint solve's deferred projection products (``Tuning.defer``) against exact ones.
 
 FFT pairs and times are benchmark figures (``contactpipe bench fretting paper-fig3``),
 not asserted here.
 """
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 import contactpipe as cp
 from contactpipe import simulation
-from contactpipe.solver import coupling, joint, tangential
+from contactpipe.solver import coupling, joint
 from contactpipe.solver.cg import BlockSums, box_cg
 from contactpipe.solver.coupling import Previous, follow_bound
+from contactpipe.solver.options import TUNING
 
 from helpers import A_HERTZ, MU, P0_HERTZ, W, fretting_scene, make_scene
+
+#: The block Gauss-Seidel passes alone (no joint solve).
+NO_JOINT = replace(TUNING, joint=False)
 
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 MAXWELL = {"material": "viscoelastic", "young": 105e9, "poisson": 0.3, "creep": "maxwell",
@@ -82,8 +88,7 @@ def test_joint_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
     calls = _watch(monkeypatch, "solve_joint")
     fast = cp.simulate(build())
     assert len(calls) >= fast.sizes["time"] + fast.attrs["preload_substeps"] - 1
-    monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
-    slow = cp.simulate(build())
+    slow = cp.simulate(build(), tuning=NO_JOINT)
     assert_same(fast, slow, 1e-7, 1e-7)
 
 
@@ -119,8 +124,7 @@ def test_joint_vector_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
     calls = _watch(monkeypatch, "solve_joint_vector")
     fast = cp.simulate(build(), tangential="vector")
     assert len(calls) >= fast.sizes["time"] + fast.attrs["preload_substeps"] - 1
-    monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
-    slow = cp.simulate(build(), tangential="vector")
+    slow = cp.simulate(build(), tangential="vector", tuning=NO_JOINT)
     p, q1, q2, w1, _ = vector_fields(fast)
     pb, q1b, q2b, w1b, _ = vector_fields(slow)
     p0 = pb.max()
@@ -173,8 +177,7 @@ def test_joint_vector_solve_near_gross_slip(monkeypatch):
     assert all(res.converged for res in seen)
     status = fast.status.values[-1]
     assert 0 < np.count_nonzero(status == 1) <= 0.05 * np.count_nonzero(status > 0)
-    monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
-    slow = cp.simulate(_oblique_load(0.95), tangential="vector")
+    slow = cp.simulate(_oblique_load(0.95), tangential="vector", tuning=NO_JOINT)
     p0 = slow.p.values.max()
     print(np.abs(fast.p.values - slow.p.values).max() / p0,
           max(np.abs(fast[c].values - slow[c].values).max() for c in ("q1", "q2")) / (MU * p0))
@@ -202,16 +205,12 @@ def test_joint_vector_solve_hands_gross_slip_to_the_passes(monkeypatch):
     assert abs(q2.sum() * cell - float(ds.T2[-1])) <= 1e-12 * W
 
 
-def test_preconditioned_tangential_gives_the_plain_answer(monkeypatch):
+def test_preconditioned_tangential_gives_the_plain_answer():
     """Steel on aluminium, 32², 20 steps, tolerance 1e-10, block Gauss-Seidel: the
     preconditioned scalar CG against the plain one, within 1e-7 of p0 and μp0 (measured
     5.5e-12 / 8.0e-10)."""
-    monkeypatch.setattr(coupling._Instant, "joint_applies", lambda *a: False)
-    fast = cp.simulate(steel_on_aluminium())
-    real = tangential.solve_scalar
-    monkeypatch.setattr(coupling, "solve_scalar",
-                        lambda *a, **k: real(*a, **{**k, "precondition": False}))
-    slow = cp.simulate(steel_on_aluminium())
+    fast = cp.simulate(steel_on_aluminium(), tuning=NO_JOINT)
+    slow = cp.simulate(steel_on_aluminium(), tuning=replace(NO_JOINT, precondition=False))
     assert_same(fast, slow, 1e-7, 1e-7)
 
 
@@ -322,8 +321,8 @@ def _folded(monkeypatch):
 
 def test_deferred_projection_products_give_the_same_answer(monkeypatch):
     """Steel on aluminium, 32², 20 steps, tolerance 1e-10: the joint passes with the
-    products of small projections deferred (``joint.DEFER``, the default) and with every
-    product exact (DEFER = 0) give p, q1 and ω1 within 1e-7 of p0 and μp0 (measured
+    products of small projections deferred (``Tuning.defer``, the default) and with every
+    product exact (defer = 0) give p, q1 and ω1 within 1e-7 of p0 and μp0 (measured
     1.7e-11 / 8.0e-10, ω1 2.6e-11), and some projections were deferred."""
     from contactpipe.solver.ledger import Deferred
     kept, real = [], Deferred.take
@@ -336,20 +335,19 @@ def test_deferred_projection_products_give_the_same_answer(monkeypatch):
     monkeypatch.setattr(Deferred, "take", take)
     deferred = cp.simulate(steel_on_aluminium())
     assert any(kept)
-    monkeypatch.setattr(joint, "DEFER", 0.0)
     kept.clear()
-    exact = cp.simulate(steel_on_aluminium())
+    exact = cp.simulate(steel_on_aluminium(), tuning=replace(TUNING, defer=0.0))
     assert kept and not any(kept)
     assert_same(deferred, exact, 1e-7, 1e-7)
 
 
 def test_joint_solve_ends_with_an_exact_product(monkeypatch):
     """The bookkeeping of deferred products, pushed to its extreme: every projection's
-    product deferred (DEFER = 1e300; steel on aluminium, 32², the Spence shear of W alone
+    product deferred (defer = 1e300; steel on aluminium, 32², the Spence shear of W alone
     at tolerance 1e-6, where the last pass too ends with some left out, folded into its
     last step). The result's A x is still the product of its own (p, q1) to 1e-13, as
-    with DEFER = 0, and ω3 is the mean of the exact gap over the contact cells (its
-    multiplier) to 1e-12. (The answer itself is compared at the default DEFER, above: a
+    with defer = 0, and ω3 is the mean of the exact gap over the contact cells (its
+    multiplier) to 1e-12. (The answer itself is compared at the default defer, above: a
     search that never sees its projections is not the solver's.)"""
     from contactpipe.solver.normal import solve_normal
     from test_coupling import ALUMINIUM as AL, STEEL, W, instant
@@ -358,10 +356,9 @@ def test_joint_solve_ends_with_an_exact_product(monkeypatch):
     b = np.stack([gap + U[2], U[0]])
     k = op.k
     for defer in (0.0, 1e300):
-        monkeypatch.setattr(joint, "DEFER", defer)
         seen = _folded(monkeypatch)
         j = joint.solve_joint(op, b, W, 0.0, cell, MU, start, np.zeros_like(gap), 1e-6,
-                              2000, 100)
+                              2000, 100, replace(TUNING, defer=defer))
         assert j.converged
         assert seen[-1] == (False, defer > 0)
         exact = op.conv.convolve_matrix([[k["33"], k["31"]], [k["13"], k["11"]]],
@@ -372,22 +369,21 @@ def test_joint_solve_ends_with_an_exact_product(monkeypatch):
         assert np.all(np.abs(j.q) <= j.bound * (1 + 1e-12))    # within its bound
 
 
-def test_joint_vector_solve_ends_with_an_exact_product(monkeypatch):
+def test_joint_vector_solve_ends_with_an_exact_product():
     """The vector joint solve's deferred projection products, pushed to their extreme
-    (``disk_cg.LAG`` = 1e300: every correction deferred; steel on aluminium, 32², W with
+    (``Tuning.defer`` = 1e300: every correction deferred; steel on aluminium, 32², W with
     T = (0.3, 0.2) μW at tolerance 1e-6): its A x is the product of its own (p, q) to
     1e-13 of its largest, ω3 the mean of the exact gap over the contact cells to 1e-12, and
     |q| within the bound of the last pass."""
-    from contactpipe.solver import disk_cg
     from contactpipe.solver.normal import solve_normal
     from test_coupling import ALUMINIUM as AL, STEEL, W, instant
     op, gap, U, cell, _, _ = instant(STEEL, AL, tangential="vector")
     start = solve_normal(op, gap, W, cell, np.zeros_like(gap), 1e-3, 2000).p
     b = np.stack([gap + U[2], U[0], U[1]])
     k = op.k
-    monkeypatch.setattr(disk_cg, "LAG", 1e300)
     j = joint.solve_joint_vector(op, b, W, [0.3 * MU * W, 0.2 * MU * W], cell, MU, start,
-                                 np.zeros((2,) + gap.shape), 1e-6, 2000, 100)
+                                 np.zeros((2,) + gap.shape), 1e-6, 2000, 100,
+                                 replace(TUNING, defer=1e300))
     assert j.converged
     exact = op.conv.convolve_matrix([[k["33"], k["31"], k["32"]],
                                      [k["13"], k["11"], k["12"]],
@@ -480,7 +476,7 @@ def test_joint_vector_solve_folds_its_corrections_into_its_steps():
     np.testing.assert_array_equal(j.bound, MU * j.p)     # on its own pressure's bound
 
 
-def test_scalar_joint_steps_fold_their_projection_products(monkeypatch):
+def test_scalar_joint_steps_fold_their_projection_products():
     """The scalar joint solve's box_cg applies its operator in halves (a
     :class:`BlockOperator`): a projection's correction rides on the step's inverse
     transforms, and so does the next pass's start (``follow``). Against whole products (a
@@ -496,10 +492,10 @@ def test_scalar_joint_steps_fold_their_projection_products(monkeypatch):
     start = solve_normal(op, gap, W, cell, np.zeros_like(gap), 1e-3, 2000).p
     b = np.stack([gap + U[2], U[0]])
 
-    def run():
+    def run(tuning=TUNING):
         op.conv.reset_counts()
         j = joint.solve_joint(op, b, W, 0.5 * MU * W, cell, MU, start, np.zeros_like(gap),
-                              1e-10, 2000, 100)
+                              1e-10, 2000, 100, tuning)
         assert j.converged
         return j, op.conv.pairs, op.conv.inverse_count
 
@@ -510,10 +506,7 @@ def test_scalar_joint_steps_fold_their_projection_products(monkeypatch):
     exact = op.conv.convolve_matrix([[k["33"], k["31"]], [k["13"], k["11"]]],
                                     [halves.p, halves.q])
     assert np.abs(halves.Ax - exact).max() <= 1e-13 * np.abs(exact).max()
-    monkeypatch.setattr(joint, "BlockOperator", lambda conv, blocks: (
-        lambda x, out=None: conv.convolve_matrix(blocks, [f if f.any() else None
-                                                          for f in x], out=out)))
-    whole, whole_pairs, _ = run()
+    whole, whole_pairs, _ = run(replace(TUNING, halves=False))
     assert halves.iterations == whole.iterations
     assert np.abs(halves.p - whole.p).max() <= 1e-9 * whole.p.max()
     assert np.abs(halves.q - whole.q).max() <= 1e-9 * MU * whole.p.max()

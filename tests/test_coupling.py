@@ -5,17 +5,16 @@ One instant of a sphere (R = 18 mm) pressed by W = 1 kN and sheared by T1 = 0.5 
 (mu = 0.1) on a 32 x 32 grid over 4 a_Hertz, starting from rest, solved at tolerance 1e-9.
 """
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import contactpipe as cp
 from contactpipe.simulation import grid_coordinates
-from contactpipe.solver import coupling as coupling_module
-from contactpipe.solver import disk_cg as disk_cg_module
-from contactpipe.solver import tangential as tangential_module
 from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
 from contactpipe.solver.normal import solve_normal
+from contactpipe.solver.options import TUNING
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
 
 from helpers import A_HERTZ, MU, STEEL, W, fretting_scene, make_scene
@@ -156,27 +155,20 @@ def _vector_path(plain, precondition=True):
     the warm starts that follow the bound and without the lagged A q of the vector CG;
     ``precondition`` False: the vector CG with TangCG's diagonal scaling alone, every
     pass's A q exact."""
-    saved = (coupling_module.follow_bound, disk_cg_module.LAG, disk_cg_module.SNAP,
-             coupling_module.solve_vector, coupling_module._Instant.joint_applies)
-    coupling_module._Instant.joint_applies = lambda self: False     # the passes themselves
+    tuning = replace(TUNING, joint=False)                           # the passes themselves
     if plain:
-        coupling_module.follow_bound = lambda q, old, new: q
-        disk_cg_module.LAG = disk_cg_module.SNAP = 0.0
+        tuning = replace(tuning, follow_bound=False, defer=0.0, snap=0.0)
     if plain or not precondition:
-        coupling_module.solve_vector = lambda *a, **k: tangential_module.solve_vector(
-            *a, **{**k, "precondition": precondition, "exact": True})
-    try:
-        op, gap, U, cell, plan, prev = instant(STEEL, ALUMINIUM, tangential="vector")
-        pairs0, out = op.conv.pairs, []
-        for t in (T1, 0.8 * MU * W, 0.2 * MU * W, -0.5 * MU * W):
-            res = solve_instant(op, gap, U, W, [t, 0.0], cell, MU, plan, prev, LIMITS)
-            assert res.converged
-            prev = Previous(res.q, res.u, res.p)
-            out.append(res)
-        return out, op.conv.pairs - pairs0
-    finally:
-        (coupling_module.follow_bound, disk_cg_module.LAG, disk_cg_module.SNAP,
-         coupling_module.solve_vector, coupling_module._Instant.joint_applies) = saved
+        tuning = replace(tuning, precondition=precondition, lagged_passes=False)
+    limits = replace(LIMITS, tuning=tuning)
+    op, gap, U, cell, plan, prev = instant(STEEL, ALUMINIUM, tangential="vector")
+    pairs0, out = op.conv.pairs, []
+    for t in (T1, 0.8 * MU * W, 0.2 * MU * W, -0.5 * MU * W):
+        res = solve_instant(op, gap, U, W, [t, 0.0], cell, MU, plan, prev, limits)
+        assert res.converged
+        prev = Previous(res.q, res.u, res.p)
+        out.append(res)
+    return out, op.conv.pairs - pairs0
 
 
 def test_preconditioned_vector_passes_reach_the_diagonally_scaled_instants():
@@ -194,20 +186,19 @@ def test_preconditioned_vector_passes_reach_the_diagonally_scaled_instants():
     assert fast_pairs < slow_pairs
 
 
-def _coarse_vector_steps_without(monkeypatch, name, replacement, fewer, cost="iterations",
-                                 replaced_accurate=True):
+def _coarse_vector_steps_without(switch, fewer, cost="iterations", replaced_accurate=True):
     """Steel on steel fretting, 32², 10 steps (T moves by a quarter of T* a step), vector
     form, run as it is and with ``disk_cg.<name>`` replaced: the run as it is reaches the
     instants of the tolerance-1e-12 run (p within 1e-7 max p, q within 1e-7 mu max p, the
     same stick/slip status), so does the replaced run where ``replaced_accurate`` (else
     its stick/slip status only), in at most ``fewer`` times the replaced run's ``cost``
     (iterations, or fft_pairs) after the first instant."""
-    def run(**solver):
-        return cp.simulate(fretting_scene(n=32, steps=10, **solver), tangential="vector")
+    def run(tuning=TUNING, **solver):
+        return cp.simulate(fretting_scene(n=32, steps=10, **solver), tangential="vector",
+                           tuning=tuning)
     ref = run(solver={"tolerance": 1e-12})
     fast = run()
-    monkeypatch.setattr(disk_cg_module, name, replacement)
-    slow = run()
+    slow = run(replace(TUNING, **{switch: False}))
     scale = float(ref.p.max())
     for ds, check in ((fast, True), (slow, replaced_accurate)):
         print(float(np.abs(ds.p - ref.p).max()) / scale,
@@ -221,8 +212,7 @@ def _coarse_vector_steps_without(monkeypatch, name, replacement, fewer, cost="it
     assert fast[cost].values[1:].sum() < fewer * slow[cost].values[1:].sum()
 
 
-def test_the_circles_curvature_in_the_line_search_reaches_coarse_vector_steps_sooner(
-        monkeypatch):
+def test_the_circles_curvature_in_the_line_search_reaches_coarse_vector_steps_sooner():
     """Coarse steps turn many cells at once. The vector CG's line search along the circles
     (tᵀ(A + D) t, D the circles' curvature on turning cells) reaches the tolerance-1e-12
     instants (measured: p 4.7e-11 of p0, q 8.1e-10 of μp0) in fewer iterations than the
@@ -231,13 +221,10 @@ def test_the_circles_curvature_in_the_line_search_reaches_coarse_vector_steps_so
     and the per-cell turn limit; bound 0.8 of them), which converges linearly and so
     stops, its last step small, short of them (q 3.0-4.7e-7 of μp0 from the sixth instant
     on; the same stick/slip status)."""
-    _coarse_vector_steps_without(monkeypatch, "curved",
-                                 lambda tAt, t, curv: float(tAt), 0.8,
-                                 replaced_accurate=False)
+    _coarse_vector_steps_without("curved_line_search", 0.8, replaced_accurate=False)
 
 
-def test_the_filter_shifted_along_the_slip_tangents_reaches_vector_steps_sooner(
-        monkeypatch):
+def test_the_filter_shifted_along_the_slip_tangents_reaches_vector_steps_sooner():
     """The vector CG's filter shifted by the circles' curvature along the turning cells'
     tangents only (under fretting along x1: on x2, not x1; :func:`disk_cg.slip_axes`)
     reaches the tolerance-1e-12 instants, as the filter shifted alike on both components
@@ -247,9 +234,7 @@ def test_the_filter_shifted_along_the_slip_tangents_reaches_vector_steps_sooner(
     components shifted take as many iterations but filter two fields more; before the
     bands, 151 against 168 iterations; 64² steel on aluminium, 40 steps: 101.5 against
     107.4 FFT pairs a step)."""
-    _coarse_vector_steps_without(monkeypatch, "slip_axes",
-                                 lambda qhat, turning: (np.eye(2), np.ones(2)), 0.98,
-                                 "fft_pairs")
+    _coarse_vector_steps_without("shift_along_tangents", 0.98, "fft_pairs")
 
 
 def test_vector_warm_starts_reach_the_plain_instants():

@@ -43,3 +43,37 @@ def test_functions_stay_short():
                 if n > MAX_FUNCTION_LINES:
                     over[f"{p.relative_to(ROOT)}:{node.name}"] = n
     assert not over, f"functions over {MAX_FUNCTION_LINES} lines: {over}"
+
+
+def _solver_names(tree):
+    """Local names a test module binds to modules of contactpipe.solver."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module == "contactpipe.solver":
+            names |= {a.asname or a.name for a in node.names}
+        elif isinstance(node, ast.Import):
+            names |= {a.asname or a.name for a in node.names
+                      if a.name.startswith("contactpipe.solver.")}
+    return names
+
+
+def test_no_test_patches_a_solver_constant():
+    """The solver core's switches and constants are data (solver/options.py: Tuning),
+    passed down explicitly: no test sets a module constant of contactpipe.solver, by
+    ``monkeypatch.setattr(module, "NAME", ...)`` or by assignment."""
+    found = []
+    for p in sorted((ROOT / "tests").glob("*.py")):
+        tree = ast.parse(p.read_text())
+        solver = _solver_names(tree)
+        for node in ast.walk(tree):
+            targets = []
+            if isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "setattr" \
+                    and len(node.args) >= 2 and isinstance(node.args[1], ast.Constant):
+                targets.append((node.args[0], str(node.args[1].value)))
+            elif isinstance(node, ast.Assign):
+                targets += [(t.value, t.attr) for t in node.targets
+                            if isinstance(t, ast.Attribute)]
+            for obj, attr in targets:
+                if isinstance(obj, ast.Name) and obj.id in solver and attr.isupper():
+                    found.append(f"{p.name}:{node.lineno} {obj.id}.{attr}")
+    assert not found, f"solver constants patched: {found}"

@@ -14,6 +14,7 @@ import pytest
 from contactpipe.materials import Body
 from contactpipe.solver.disk_cg import direction, slip_axes
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
+from contactpipe.solver.options import TUNING
 
 N1, N2 = 32, 24
 D1, D2 = 2e-3 / N1, 2e-3 / N2
@@ -126,7 +127,6 @@ def _along_x1(turning):
 def _x1_direction(op, curvature):
     """(M, a, z, g, curv, free, turning, d̄_2): the direction of a random residual on
     _cells(8) slipping along ±x1, the curvature ``curvature`` x its draw x a."""
-    from contactpipe.solver import disk_cg
     M = op.tangential_preconditioner()
     a = op.self_influence("11")
     free, turning, _, curv = _cells(8)
@@ -135,19 +135,18 @@ def _x1_direction(op, curvature):
     g = np.random.default_rng(9).standard_normal((2, N1, N2))
     g[0] = np.where(turning, 0.0, g[0])                 # tangential on turning cells
     z = direction(M, g, curv, qhat, a, free, turning)
-    d2 = disk_cg.CURVATURE_SHIFT * float(np.median(curv[turning]))
+    d2 = TUNING.curvature_shift * float(np.median(curv[turning]))
     return M, a, z, g, curv, free, turning, d2
 
 
 def test_direction_is_the_filter_shifted_along_the_tangents(op):
     """The vector CG's preconditioner below the band gate: with the turning cells' axes
     (x1, x2) and all the tangents' share on x2, z = S_c M(S_c g_c, d̄_c) per component,
-    d̄_1 = 0, d̄_2 = CURVATURE_SHIFT x the median curvature (here 0.3 a), cut back to the
+    d̄_1 = 0, d̄_2 = Tuning.curvature_shift x the median curvature (here 0.3 a), cut back to the
     tangents, each component's filter modelled along its own axis: to 1e-12 of the
     largest value, against the formula written out."""
-    from contactpipe.solver import disk_cg
     M, a, z, g, curv, free, turning, d2 = _x1_direction(op, 0.1)
-    assert 0.0 < d2 < disk_cg.BAND_GATE * a
+    assert 0.0 < d2 < TUNING.band_gate * a
     act = free | turning
     S1, S2 = np.sqrt(a / (a + curv)) * act, np.sqrt((a + d2) / (a + curv)) * act
     expect = np.stack([S1 * M(S1 * g[0], 0.0, axis=X1), S2 * M(S2 * g[1], d2, axis=X2)])
@@ -158,15 +157,14 @@ def test_direction_is_the_filter_shifted_along_the_tangents(op):
 def test_direction_in_two_bands_above_the_gate(op):
     """Above the gate (d̄_2 about 3 a) the tangents' component is filtered in two bands,
     each scaled by the cells' diagonal at its stiffness: z_2 = H M_high(H g_2, d̄_2) +
-    L M_low(L g_2, d̄_2), H = √(K̂_f/(K̂_f + d_i)), L = √(k/(k + d_i)), k = LOW_BAND x d̄_2,
+    L M_low(L g_2, d̄_2), H = √(K̂_f/(K̂_f + d_i)), L = √(k/(k + d_i)), k = Tuning.low_band x d̄_2,
     both 1 on free cells; x1 as below the gate: to 1e-12 of the largest value."""
-    from contactpipe.solver import disk_cg
     M, a, z, g, curv, free, turning, d2 = _x1_direction(op, 1.0)
-    assert d2 > disk_cg.BAND_GATE * a
+    assert d2 > TUNING.band_gate * a
     act = free | turning
     S1 = np.sqrt(a / (a + curv)) * act
     H = np.sqrt(np.where(turning, M.finest / (M.finest + curv), act))
-    k = disk_cg.LOW_BAND * d2
+    k = TUNING.low_band * d2
     L = np.sqrt(np.where(turning, k / (k + curv), act))
     expect = np.stack([S1 * M(S1 * g[0], 0.0, axis=X1),
                        H * M(H * g[1], d2, band="high", axis=X2)
@@ -236,12 +234,12 @@ def test_a_cell_turning_too_far_has_its_own_step_shortened():
     t[1, 0, 0], t[1, 0, 1] = -2.0, -0.1                  # tangent steps −τ t along +x2
     assert disk_cg.shortened(t, 0.1, rho, turning) is None
     short = disk_cg.shortened(t, 1.0, rho, turning)
-    np.testing.assert_allclose(short[0, :2], [disk_cg.SPIN / 2.0, 1.0], rtol=1e-14)
+    np.testing.assert_allclose(short[0, :2], [TUNING.spin / 2.0, 1.0], rtol=1e-14)
     assert np.all(short[stick] == 1.0)
     x_new, d, err, norm = disk_cg._step(x, 1.0, t, rho, Constraints.none((2, n, n)),
                                         (rho > 0, stick, turning), None, 1.0, short)
     angle = np.arctan2(x_new[1], x_new[0])
-    assert angle[0, 0] == pytest.approx(np.arctan(disk_cg.SPIN), rel=1e-12)
+    assert angle[0, 0] == pytest.approx(np.arctan(TUNING.spin), rel=1e-12)
     assert angle[0, 1] == pytest.approx(np.arctan(0.1), rel=1e-12)
     np.testing.assert_allclose(np.hypot(*x_new[:, turning]), 1.0, rtol=1e-12)
     np.testing.assert_allclose(x_new[:, stick], -0.01, rtol=1e-12)

@@ -67,6 +67,7 @@ from ..files import check_output_path, write_text
 from ..scene import Scene
 from ..simulation import simulate
 from ..solver.convolution import Convolver
+from ..solver.options import tuning_from
 
 __all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
            "table_rows", "write_table", "default_table_path"]
@@ -125,7 +126,7 @@ def _load() -> float:
     return os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
 
 
-def timed_run(scene, form=None):
+def timed_run(scene, form=None, tuning=None):
     """Run ``scene`` in memory: (dataset, the run's wall time [s], the wall time of a step
     after the first instant [ms], the one-minute load average, the higher of before and
     after).
@@ -133,11 +134,14 @@ def timed_run(scene, form=None):
     A step's time is that from the end of the first instant to the end of the last step,
     over the steps between: the setup (FFT plans, kernel spectra) and the first instant
     (its frictional preload, its error estimate) are left out, as the per-step pairs
-    leave them out. NaN for a run of one instant.
+    leave them out. NaN for a run of one instant. ``tuning``: the solver core's switches
+    (:class:`contactpipe.solver.options.Tuning`; None: the defaults).
     """
     stamps = []
     load = _load()
     kw = {} if form is None else {"tangential": form}
+    if tuning is not None:
+        kw["tuning"] = tuning
     t0 = time.perf_counter()
     ds = simulate(scene, on_step=lambda k, t, rec: stamps.append(time.perf_counter()), **kw)
     run_s = time.perf_counter() - t0
@@ -203,7 +207,7 @@ def bench_normal(grids, backend, threads):
     return rows
 
 
-def bench_fretting(grids, backend, threads, steps=40):
+def bench_fretting(grids, backend, threads, steps=40, tuning=None):
     rows = []
     print(f"fretting loop T: 0 -> .9μW -> -.9μW -> .9μW, μ = 0.1, {steps} steps, grid over 3a, "
           "tol 1e-9; per step after the first instant (warm-started; setup left out)")
@@ -222,7 +226,7 @@ def bench_fretting(grids, backend, threads, steps=40):
                             time={"steps": steps},
                             solver={"fft": backend, "threads": threads})
                 pair = _floor_ms(n, backend, threads)[0]
-                ds, run_s, ms, load = timed_run(sc, form)
+                ds, run_s, ms, load = timed_run(sc, form, tuning)
                 pair = min(pair, _floor_ms(n, backend, threads)[0])
                 r = dict(case="fretting", pair=label, form=form, grid=n,
                          steps=ds.sizes["time"] - 1,
@@ -259,7 +263,7 @@ def bench_memory(backend, threads, n=64, steps=1000):
     return rows
 
 
-def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
+def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",), tuning=None):
     rows = []
     Ts = 0.9 * MU * W
     print(f"paper figure 3: rigid sphere on Maxwell (glassy E = 105 GPa, ν = 0.3: the steel "
@@ -278,7 +282,7 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",)):
                     grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
                     solver={"fft": backend, "threads": threads})
         pair = _floor_ms(n, backend, threads)[0]
-        ds, run_s, ms, load = timed_run(sc, form)
+        ds, run_s, ms, load = timed_run(sc, form, tuning)
         pair = min(pair, _floor_ms(n, backend, threads)[0])
         r = dict(case="paper-fig3", pair="rigid/Maxwell", form=form, grid=n,
                  steps=ds.sizes["time"] - 1,
@@ -387,9 +391,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "a single run on both cores of a 2-core machine)")
     parser.add_argument("--vector", action="store_true",
                         help="paper-fig3: also time the vector tangential form (slow)")
+    parser.add_argument("--tuning", nargs="+", default=[], metavar="NAME=VALUE",
+                        help="fretting, paper-fig3: solver switches and constants changed "
+                             "from their defaults, e.g. joint=false defer=0 (the names: "
+                             "contactpipe.solver.options.Tuning)")
 
 
-def _run_case(case, args):
+def _run_case(case, args, tuning=None):
     grids, steps = args.grids, args.steps
     if args.quick:
         grids, steps = grids or QUICK["grids"], steps or QUICK["steps"]
@@ -397,11 +405,12 @@ def _run_case(case, args):
         return bench_normal(grids or [64, 128, 256, 512], args.fft, args.threads)
     if case == "fretting":
         return bench_fretting(grids or [64, 128, 256], args.fft, args.threads,
-                              steps=steps or 40)
+                              steps=steps or 40, tuning=tuning)
     if case == "paper-fig3":
         return bench_paper_fig3(args.fft, args.threads, steps=steps or 200,
                                 n=grids[0] if grids else 128,
-                                forms=("scalar", "vector") if args.vector else ("scalar",))
+                                forms=("scalar", "vector") if args.vector else ("scalar",),
+                                tuning=tuning)
     if args.quick:
         return CASES[case](args.fft, args.threads,
                            *QUICK["memory" if case == "memory" else "long_run"])
@@ -416,11 +425,15 @@ def main(args) -> int:
         raise SceneError(f"bench --grids {min(args.grids)}: allowed whole numbers ≥ 2")
     if args.steps is not None and args.steps < 1:
         raise SceneError(f"bench --steps {args.steps}: allowed whole numbers ≥ 1")
+    try:
+        tuning = tuning_from(args.tuning) if args.tuning else None
+    except ValueError as e:
+        raise SceneError(f"bench --{e}") from None
     csv_path = None if args.csv is None else check_output_path(args.csv, "table (--csv)")
     date = f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%dT%H:%MZ}"
     tables = []
     for case in args.cases:
-        rows = table_rows(_run_case(case, args), date=date)
+        rows = table_rows(_run_case(case, args, tuning), date=date)
         if rows:
             tables.append((case, rows))
         print()

@@ -50,6 +50,7 @@ import numpy as np
 from .cg import Constraints
 from .joint import finish, finish_vector, solve_joint, solve_joint_vector
 from .normal import NormalControl, NormalResult, solve_normal
+from .options import TUNING, Tuning
 from .tangential import follow_bound, force_rows, solve_scalar, solve_vector
 
 __all__ = ["Controls", "FREEDOMS", "InstantResult", "Previous", "Tolerances",
@@ -58,14 +59,6 @@ __all__ = ["Controls", "FREEDOMS", "InstantResult", "Previous", "Tolerances",
 #: The six freedoms, in the order of :class:`Controls`' arrays: (force, motion) names.
 FREEDOMS = (("W", "omega3"), ("T1", "omega1"), ("T2", "omega2"), ("M1", "phi1"),
             ("M2", "phi2"), ("M3", "phi3"))
-
-#: Loosest inner tolerance of the first passes of a coupled instant [1].
-FIRST_PASS_TOLERANCE = 1e-4
-#: Inner tolerance of a later pass, as a fraction of the last relative pressure change [1].
-PASS_TOLERANCE_FRACTION = 1e-3
-#: Tolerance of the normal solve that starts a joint solve from nothing in contact [1].
-COLD_START_TOLERANCE = 1e-3
-
 
 @dataclass(frozen=True)
 class Tolerances:
@@ -80,11 +73,19 @@ class Tolerances:
         Iterations allowed to one inner solve.
     max_passes : int
         Normal-tangential passes allowed to a coupled instant.
+    tuning : Tuning
+        The solver core's switches and constants (:class:`~.options.Tuning`), handed
+        down to every solve of the instant (None: the defaults).
     """
 
     tol: float
     max_iter: int
     max_passes: int
+    tuning: Tuning = TUNING
+
+    def __post_init__(self):
+        if self.tuning is None:
+            object.__setattr__(self, "tuning", TUNING)
 
 
 @dataclass(frozen=True)
@@ -256,27 +257,33 @@ class _Instant:
         op, U, u_prev = self.op, self.U, self.prev.u
         up = op.coupling_to_tangential(p) if self.coupled else None     # (u1, u2) from p
         bound = self.mu * p
-        if self.bound is not None:
+        if self.bound is not None and self.lim.tuning.follow_bound:
             # both CGs tell slip from stick by |q| = mu p: a pass keeps the slip cells on
             # their moved bound, or they start as stick cells and slide back
             # (several times the pairs of a pass: docs/design-choices.md, D18)
-            q, Aq0 = follow_bound(q, self.bound, bound), None
+            q = follow_bound(q, self.bound, bound)
+        if self.bound is not None:
+            Aq0 = None
         self.bound = bound
+        tuning = self.lim.tuning
+        exact = final or not tuning.lagged_passes
         if self.vector:
             b = U[:2] - u_prev[:2] + (up if up is not None else 0.0)
             if self.rows is not None:
                 con, known, _ = self.rows
                 return solve_vector(op, b - known, bound, None, self.cell, q, tol,
-                                    self.lim.max_iter, Aq0, rows=con, exact=final), up
+                                    self.lim.max_iter, Aq0, rows=con, exact=exact,
+                                    tuning=tuning), up
             return solve_vector(op, b, bound, self.T, self.cell, q, tol, self.lim.max_iter,
-                                Aq0, exact=final), up
+                                Aq0, exact=exact, tuning=tuning), up
         b = U[0] - u_prev[0] + (up[0] if up is not None else 0.0)
         T1 = self.T[0]
         if self.rows is not None:
             con, known, _ = self.rows
             b, T1 = b - known[0], (self.T[0] if con.m else None)
         return solve_scalar(op, b, bound, T1, self.cell, q[0], tol, self.lim.max_iter,
-                            None if Aq0 is None else Aq0[0]), up
+                            None if Aq0 is None else Aq0[0],
+                            precondition=tuning.precondition), up
 
     def motions(self, t_res):
         """(Δω1, Δω2, Δφ3) of a tangential solution: multipliers or known increments."""
@@ -297,8 +304,9 @@ class _Instant:
     def joint_applies(self) -> bool:
         """The instant can be solved as one problem over (p, q) (:mod:`.joint`): a coupled
         instant under force control of W > 0 and T alone (the scalar form: T1), with a
-        uniform μ and |T| within μW."""
-        return (self.coupled and self.tang in ("scalar", "vector") and not self.op.rigid
+        uniform μ and |T| within μW; never with ``tuning.joint`` off."""
+        return (self.lim.tuning.joint and self.coupled and self.tang in ("scalar", "vector")
+                and not self.op.rigid
                 and self.ctl.is_force(0) and self.normal_ctl is None and self.rows is None
                 and np.ndim(self.mu) == 0 and self.W > 0.0
                 and (float(np.hypot(*self.T)) if self.vector else abs(self.T[0]))
@@ -309,25 +317,24 @@ class _Instant:
         its shear on the final pressure's bound, ended by :func:`.joint.finish`
         (:func:`.joint.finish_vector`); None when the joint solve did not converge (the
         block Gauss-Seidel passes then take over from the start)."""
-        prev, U, op, mu = self.prev, self.U, self.op, self.mu
+        prev, U, op, mu, lim = self.prev, self.U, self.op, self.mu, self.lim
         p0 = prev.p_guess if prev.p_start is None else prev.p_start
         if not np.any(p0 > 0):
             # nothing in contact yet (a preload's first sub-step): the pressure of the
             # normal problem alone, by its multilevel start, begins the joint solve
-            n = self.normal(prev.q, p0, max(tol, COLD_START_TOLERANCE))
+            n = self.normal(prev.q, p0, max(tol, lim.tuning.cold_start_tolerance))
             self.its += n.iterations
             if not n.converged:
                 return None
             p0 = n.p
-        lim = self.lim
         if self.vector:
             b = np.stack([self.gap + U[2], U[0] - prev.u[0], U[1] - prev.u[1]])
             j = solve_joint_vector(op, b, self.W, self.T, self.cell, mu, p0, prev.q, tol,
-                                   lim.max_iter, lim.max_passes)
+                                   lim.max_iter, lim.max_passes, lim.tuning)
         else:
             b = np.stack([self.gap + U[2], U[0] - prev.u[0]])
             j = solve_joint(op, b, self.W, self.T[0], self.cell, mu, p0, prev.q[0], tol,
-                            lim.max_iter, lim.max_passes)
+                            lim.max_iter, lim.max_passes, lim.tuning)
         self.its += j.iterations
         if not j.converged:
             return None
@@ -455,7 +462,7 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     """
     ctl = controls if controls is not None else Controls.forces(W, T)
     s = _Instant(op, gap, U, ctl, cell_area, mu, plan, previous, limits)
-    tol = limits.tol
+    tol, tuning = limits.tol, limits.tuning
     if s.joint_applies():
         res = s.joint(tol)
         if res is not None:
@@ -485,7 +492,7 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     elif s.tang != "none":
         # the pass before the last one allowed runs at the full tolerance, so that the
         # last can settle the step (a pass settles only after one at the full tolerance)
-        inner = max(tol, FIRST_PASS_TOLERANCE) if s.coupled and limits.max_passes > 2 \
+        inner = max(tol, tuning.passes_first_tolerance) if s.coupled and limits.max_passes > 2 \
             else tol
         t_res, up = s.tangential(p, q, inner, final=not s.coupled)
         s.its += t_res.iterations
@@ -510,7 +517,7 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                                      change, "coupling", n)
             s.passes += 1
             p = n.p
-            inner = min(inner, max(tol, PASS_TOLERANCE_FRACTION * change))
+            inner = min(inner, max(tol, tuning.passes_tolerance_fraction * change))
             if s.passes >= limits.max_passes - 1:
                 inner = tol
             # an open contact (p = 0: an approach that lifts it) leaves q = 0 exactly

@@ -26,7 +26,7 @@ The iteration, over all contact cells at once:
 * the line search measures the step's curvature along the circles, not only along their
   tangents (:func:`curved`): a turning cell's Hessian is the operator's plus the circle's
   curvature |r·q̂|/ρ;
-* no turning cell turns by more than :data:`SPIN` in one step: a cell that would has its
+* no turning cell turns by more than ``Tuning.spin`` in one step: a cell that would has its
   own step shortened (the others take the full one);
 * after the step, stick cells pushed past the disk are projected radially (they join the
   slip set), turning cells put back on their circles, the rows restored by projecting the
@@ -40,7 +40,7 @@ Each iteration costs one operator application, applied in its halves
 search's curvature tᵀA t by Parseval's theorem, and A x follows the projected step through
 one set of inverse transforms of −τ A t plus the projection's correction d, which so costs
 its forward transforms only (a block that did not move costs none). A correction is left
-out of A x while the corrections summed stay below :data:`LAG` x tol; where the solve
+out of A x while the corrections summed stay below ``Tuning.defer`` x tol; where the solve
 converges, what is left out and the caller's next point (``follow``: the next coupling
 pass's start, the instant's final state) ride on the last step the same way.
 """
@@ -52,42 +52,10 @@ import numpy as np
 
 from .cg import BlockSums, disk_project, project_rows
 from .ledger import Ledger
+from .options import TUNING
 
-__all__ = ["BAND_GATE", "CURVATURE_SHIFT", "DiskResult", "LAG", "LOW_BAND",
-           "PressureBlock", "SNAP", "SPIN", "STALL", "curvature", "curved", "direction",
-           "disk_cg", "disk_start", "magnitude", "restore_rows", "shortened", "slip_axes"]
-
-#: A warm start's cell within SNAP x tol (relative) of its bound starts on it [1].
-SNAP = 0.1
-
-#: The circle corrections a CG may leave out of A x, summed, as a fraction of its
-#: tolerance (their product is added once they would exceed it, and at the end) [1].
-LAG = 0.1
-
-#: The filter is shifted by this fraction of the turning cells' median circle curvature,
-#: along the turning cells' tangents: the fewest iterations of the fractions tried, none
-#: (and no filter) far more (docs/design-choices.md, D16) [1].
-CURVATURE_SHIFT = 0.3
-
-#: An axis whose shift d̄_c exceeds this fraction of the self-influence a is filtered in
-#: two bands (:func:`direction`): with one, a stick cell's smooth shear is over-weighted
-#: (a + d̄_c)/a times, and d̄_c/a doubles with each refinement of the grid (the curvature
-#: does not depend on it, a ∝ cell size) [1].
-BAND_GATE = 0.5
-
-#: The low band's cells are scaled as at the stiffness LOW_BAND x d̄_c: the fewest FFT
-#: pairs of the values tried, within 2 % (docs/design-choices.md, D16) [1].
-LOW_BAND = 8.0
-
-#: The largest angle [rad] a turning cell may turn in one step; a cell that would turn
-#: further has its own step shortened to it.
-SPIN = 0.5
-
-#: Iterations without halving the best step before the CG stops, not converged (it
-#: stalls where nearly every cell turns on its circle; the vector form's projected
-#: gradient then takes over) [1].
-STALL = 50
-
+__all__ = ["DiskResult", "PressureBlock", "curvature", "curved", "direction", "disk_cg",
+           "disk_start", "magnitude", "restore_rows", "shortened", "slip_axes"]
 
 @dataclass
 class DiskResult:
@@ -175,14 +143,14 @@ def restore_rows(q, rho, con, stick):
     return q
 
 
-def disk_start(q0, rho, con, tol):
-    """A warm start within the disks (zero off the contact), its cells within :data:`SNAP`
+def disk_start(q0, rho, con, tol, snap=TUNING.snap):
+    """A warm start within the disks (zero off the contact), its cells within ``snap``
     x tol of their bound put on it (else a bound raised by rounding turns slip cells into
     stick cells, which slide back in tens of iterations), the rows met."""
     movable = rho > 0
     q, _ = disk_project(np.where(movable, q0, 0.0), rho)
     mag = magnitude(q)
-    near = movable & (mag >= rho * (1.0 - SNAP * tol)) & (mag > 0)
+    near = movable & (mag >= rho * (1.0 - snap * tol)) & (mag > 0)
     q[:, near] *= rho[near] / mag[near]
     return restore_rows(q, rho, con, movable & ~near)
 
@@ -229,7 +197,7 @@ def slip_axes(qhat, turning):
     return V.T, (np.maximum(w, 0.0) / total if total > 0.0 else np.full(2, 0.5))
 
 
-def direction(M, gt, curv, qhat, a_self, free, turning):
+def direction(M, gt, curv, qhat, a_self, free, turning, tuning=TUNING):
     """The preconditioned shear residual z (before the rows are kept) [Pa]: ``gt`` the
     residual (tangential on turning cells) [m], ``curv`` the circles' curvature [m/Pa]
     (:func:`curvature`), ``a_self`` the self-influence [m/Pa], all in q units.
@@ -239,16 +207,16 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     (:func:`slip_axes`): z_c = S_c M(S_c gt_c, d̄_c) [Pa], M ≈ (K_cc + d̄_c)⁻¹ the
     inverse of the block's model symbol along e_c (anisotropic: K_cc is 1/(1 − ν_e)
     times stiffer for modes varying across e_c than along it) shifted by
-    d̄_c = :data:`CURVATURE_SHIFT` x the turning cells' median circle curvature x the
+    d̄_c = ``tuning.curvature_shift`` x the turning cells' median circle curvature x the
     share of their tangents along e_c, S_c = √((a + d̄_c)/(a + d_i)) each cell's own
     diagonal (d_i = 0 on free cells); z turned back to x1, x2 and cut back
     to the tangents on turning cells.
 
-    Where d̄_c > :data:`BAND_GATE` x a, the component is filtered in two bands instead
+    Where d̄_c > ``tuning.band_gate`` x a, the component is filtered in two bands instead
     (``M``'s ``band``, which sum to the unshifted filter):
     z_c = H_c M_high(H_c gt_c, d̄_c) + L_c M_low(L_c gt_c, d̄_c), H_c = √(K̂_f/(K̂_f + d_i))
     the cells' diagonal at the finest mode's stiffness K̂_f, L_c = √(k/(k + d_i)) at
-    k = :data:`LOW_BAND` x d̄_c (1 on free cells in both). A stick cell then keeps the
+    k = ``tuning.low_band`` x d̄_c (1 on free cells in both). A stick cell then keeps the
     unshifted filter at every frequency, where one band over-weighted its smooth shear
     (a + d̄_c)/a times (the top eigenvalue of the preconditioned Hessian, which grows as
     the grid is refined), and a turning cell is scaled by its own curvature where the
@@ -265,13 +233,14 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     if M is None:
         return np.where(free | turning, gt * (a_self / (a_self + curv)), 0.0)
     if turning.any():
-        axes, share = slip_axes(qhat, turning)
-        shift = CURVATURE_SHIFT * float(np.median(curv[turning])) * share
+        axes, share = (slip_axes(qhat, turning) if tuning.shift_along_tangents
+                       else (np.eye(2), np.ones(2)))
+        shift = tuning.curvature_shift * float(np.median(curv[turning])) * share
     else:
         axes, shift = np.eye(2), np.zeros(2)
     g = np.einsum("ci,i...->c...", axes, gt)
     act = free | turning
-    banded = shift > BAND_GATE * a_self
+    banded = shift > tuning.band_gate * a_self
     one = ~banded
     z = np.empty_like(g)
     if one.any():
@@ -282,7 +251,7 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     for c in np.flatnonzero(banded):
         d = shift[c]
         z[c] = 0.0
-        for band, k in (("high", M.finest), ("low", LOW_BAND * d)):
+        for band, k in (("high", M.finest), ("low", tuning.low_band * d)):
             B = np.sqrt(np.where(turning, k / (k + curv), act))
             z[c] += B * M(B * g[c], d, band=band, axis=axes[c])
     z = np.einsum("ci,c...->i...", axes, z)
@@ -290,9 +259,9 @@ def direction(M, gt, curv, qhat, a_self, free, turning):
     return np.where(turning, z - along * qhat, z)
 
 
-def shortened(t, tau, rho, turning):
+def shortened(t, tau, rho, turning, limit=TUNING.spin):
     """Per cell, the fraction of the step τ t that a turning cell may take without turning
-    by more than :data:`SPIN` (its tangent step τ |t| at most SPIN ρ), 1 elsewhere; None
+    by more than ``limit`` [rad] (its tangent step τ |t| at most limit ρ), 1 elsewhere; None
     where every cell takes the whole step. Shortening the cells that would turn too far,
     and not the step of all, keeps the others' progress: capping τ on the first
     tangential step of the bench's fretting (the preload's radial shear turned round to
@@ -302,9 +271,9 @@ def shortened(t, tau, rho, turning):
         return None
     spin = magnitude(t[-2:])
     spin *= tau / rho
-    if not float(spin.max(where=turning, initial=0.0)) > SPIN:
+    if not float(spin.max(where=turning, initial=0.0)) > limit:
         return None
-    return np.where(turning & (spin > SPIN), SPIN / np.maximum(spin, SPIN), 1.0)
+    return np.where(turning & (spin > limit), limit / np.maximum(spin, limit), 1.0)
 
 
 def _conjugate(t, z, rz, rz_old, gr, qhat, turning):
@@ -354,7 +323,7 @@ def _step(x, tau, t, rho, con, cells, pressure, scale, short=None):
     return x_new, (d if d.any() else None), err, scale
 
 
-def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure):
+def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure, tuning):
     """An iteration's reduced residual and its preconditioned direction.
 
     ``g`` = A x + b. Returns (gr: the residual less the rows' multipliers, gt: gr cut
@@ -380,7 +349,7 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure)
     curv = curvature(radial, rho_safe, turning)
     z = np.empty_like(x)
     z[-2:] = con.keep(direction(M, gt[-2:] / unit, curv / (unit * unit), qhat, a_self,
-                                free, turning) / unit, free)
+                                free, turning, tuning) / unit, free)
     sets = (free, turning)
     entered = bool(released.any())
     if pressure is not None:
@@ -393,7 +362,7 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure)
 
 def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
             pressure: PressureBlock | None = None, scale=None, follow=None,
-            exact=True) -> DiskResult:
+            exact=True, tuning=TUNING) -> DiskResult:
     """The projected CG (module notes) from a feasible start.
 
     Parameters
@@ -431,6 +400,9 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
     exact : bool
         A converged result's A x takes in every correction left out (folded into the last
         step: their forward transforms only); False leaves them in ``pending``.
+    tuning : Tuning
+        ``defer`` (the corrections left out of A x), ``stall``, ``spin``,
+        ``curved_line_search`` and the filter's constants (:func:`direction`).
 
     Returns
     -------
@@ -447,12 +419,12 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
     rz_old, sets_old = 1.0, None
     err, best, best_it = np.inf, np.inf, 0
     lam = np.zeros(con.m)
-    book, it = Ledger(A, True, LAG * tol, follow, exact), 0
+    book, it = Ledger(A, True, tuning.defer * tol, follow, exact), 0
     for it in range(1, max_iter + 1):
-        if it - best_it > STALL:    # no progress: leave it to the caller's fallback
+        if it - best_it > tuning.stall:    # no progress: leave it to the caller's fallback
             break
         gr, gt, z, curv, qhat, cells, sets, entered, lam = _residual(
-            x, Ax + b, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure)
+            x, Ax + b, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure, tuning)
         turning = cells[2]
         rz = float(np.sum(gt * z))
         if not rz > 0.0:
@@ -462,12 +434,13 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
                  or not all(np.array_equal(a, c) for a, c in zip(sets, sets_old)))
         t = z if reset else _conjugate(t, z, rz, rz_old, gr, qhat, turning)
         rz_old, sets_old = rz, sets
-        denom = curved(book.curvature(t)[1], t, curv)
+        tAt = book.curvature(t)[1]
+        denom = curved(tAt, t, curv) if tuning.curved_line_search else float(tAt)
         if denom <= 0.0:
             err = 0.0
             break
         tau = float(np.sum(gr * t)) / denom
-        short = shortened(t, tau, rho_safe, turning)
+        short = shortened(t, tau, rho_safe, turning, tuning.spin)
         x_new, d, err, norm = _step(x, tau, t, rho, con, cells, pressure, scale, short)
         if not err >= 0.0:      # NaN: the iterate is lost
             err = np.inf

@@ -31,7 +31,7 @@ schedule as the block Gauss-Seidel passes; the passes stop when one at the full 
 moves p by less than the tolerance, or by so little that the next would at the contraction
 just measured. A projection that moves the iterate by less than a tenth of the pass's
 inner tolerance leaves its product out of A x until a larger one, or the next pass's start,
-takes it in (:data:`DEFER`; the last pass's are taken in before its A x is returned).
+takes it in (``Tuning.defer``; the last pass's are taken in before its A x is returned).
 :func:`finish` then puts the shear on the final pressure's bound, so that
 Coulomb's law holds exactly, and builds the displacement from the products the solve
 kept (docs/design-choices.md, "The coupled instant").
@@ -45,25 +45,10 @@ import numpy as np
 from .blocks import BlockOperator
 from .cg import BlockSums, box_cg, disk_project, feasible_start
 from .disk_cg import PressureBlock, disk_cg, disk_start, restore_rows
+from .options import TUNING
 from .tangential import follow_bound, force_rows, multipliers, scalar_multiplier, sliding
 
 __all__ = ["JointResult", "finish", "finish_vector", "solve_joint", "solve_joint_vector"]
-
-#: Loosest inner tolerance, that of the first pass [1] (never below the caller's): the
-#: first pass answers the new load and the moved bound at once, and its pressure change
-#: (about 1e-3) sets the next pass's tolerance anyway; 1e-4 (the block Gauss-Seidel
-#: passes' value) cost 4-11 % more FFT pairs (docs/design-choices.md).
-FIRST_PASS_TOLERANCE = 1e-3
-#: Inner tolerance of a later pass, as a fraction of the last relative pressure change [1].
-PASS_TOLERANCE_FRACTION = 1e-2
-#: A pass whose inner tolerance would be within this factor of the full one runs at the
-#: full tolerance, so that it can be the last [1].
-FULL_WITHIN = 10.0
-#: A projection that moves the iterate by less than this fraction of the pass's inner
-#: tolerance leaves its product out of A x until the next one that does not, or the next
-#: pass's start, takes it in (``box_cg(defer=...)``) [1].
-DEFER = 0.1
-
 
 @dataclass
 class JointResult:
@@ -84,13 +69,19 @@ class JointResult:
 class _Schedule:
     """The joint passes' inexact schedule and their end, for both forms.
 
-    ``inner`` is the next pass's inner tolerance: the first pass's at first, then a
-    fraction of the last pressure change, never looser than the pass before nor tighter
-    than the full one, and the full one once within :data:`FULL_WITHIN` of it, so that the
-    pass may be the last. ``change`` is the last pass's Σ|Δp| Δ / W [1]."""
+    ``inner`` is the next pass's inner tolerance: the first pass's
+    (``tuning.joint_first_pass_tolerance``: the first pass answers the new load and the
+    moved bound at once, and its pressure change, about 1e-3, sets the next pass's
+    tolerance anyway; 1e-4 cost 4-11 % more FFT pairs, docs/design-choices.md) at first,
+    then ``tuning.joint_pass_fraction`` of the last pressure change, never looser than the
+    pass before nor tighter than the full one, and the full one once within
+    ``tuning.joint_full_within`` of it, so that the pass may be the last. ``change`` is
+    the last pass's Σ|Δp| Δ / W [1]."""
 
-    def __init__(self, tol):
-        self.tol, self.inner, self.change = tol, max(tol, FIRST_PASS_TOLERANCE), np.inf
+    def __init__(self, tol, tuning=TUNING):
+        self.tuning = tuning
+        self.tol, self.inner = tol, max(tol, tuning.joint_first_pass_tolerance)
+        self.change = np.inf
 
     def last_allowed(self, passes, max_passes):
         """The last pass allowed runs at the full tolerance: only such a pass can settle
@@ -105,14 +96,14 @@ class _Schedule:
         then below the tolerance)."""
         tol, last, old = self.tol, self.inner == self.tol, self.change
         self.change = change = float(np.abs(p_new - p).sum()) * cell_area / max(W, 1e-300)
-        inner = min(self.inner, max(tol, PASS_TOLERANCE_FRACTION * change))
-        self.inner = tol if inner < FULL_WITHIN * tol else inner
+        inner = min(self.inner, max(tol, self.tuning.joint_pass_fraction * change))
+        self.inner = tol if inner < self.tuning.joint_full_within * tol else inner
         return last and (change < tol or (0.0 < old < np.inf
                                           and change * min(1.0, change / old) < tol))
 
 
 def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
-                max_passes) -> JointResult:
+                max_passes, tuning=TUNING) -> JointResult:
     """The coupled instant of the scalar form under force control of W and T1.
 
     Parameters
@@ -132,6 +123,8 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         Warm starts [Pa]: the previous instant's pressure (in contact somewhere) and shear.
     tol, max_iter, max_passes :
         As in :class:`contactpipe.solver.coupling.Tolerances`.
+    tuning : Tuning
+        The passes' schedule, the deferral of projection products, the halves.
 
     Returns
     -------
@@ -148,7 +141,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     blocks = [[k["33"], mu * k["31"]], [mu * k["13"], mu * mu * k["11"]]]
     shape = (2,) + p0.shape
 
-    apply = BlockOperator(conv, blocks)   # a zero block (a start's update): no transform
+    apply = _operator(conv, blocks, tuning)   # a zero block (a start's update): no transform
 
     filter_ = op.joint_preconditioner()
 
@@ -162,7 +155,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
     zero, inf = np.zeros_like(p0), np.full_like(p0, np.inf)
     p, s = np.array(p0, dtype=float), np.array(q0, dtype=float) / mu
     # a pass's start: from the second pass on, box_cg's ``follow``'s, whose product Ax is
-    x, Ax, its, plan = np.stack([p, s]), None, 0, _Schedule(tol)
+    x, Ax, its, plan = np.stack([p, s]), None, 0, _Schedule(tol, tuning)
     for passes in range(1, max_passes + 1):
         plan.last_allowed(passes, max_passes)
         lag = p                                   # the bound of s: |s| <= p (lagged)
@@ -185,7 +178,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
 
         res = box_cg(apply, b, lo, hi, rows, x, tol=plan.inner, max_iter=max_iter,
                      restore="shift", Ax0=Ax, precondition=precondition, Ax0_of=x,
-                     update=True, defer=DEFER, follow=follow, exact=True)
+                     update=True, defer=tuning.defer, follow=follow, exact=True)
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
@@ -200,6 +193,15 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                                plan.change)
     return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, max_passes, False,
                        plan.change)
+
+
+def _operator(conv, blocks, tuning):
+    """The joint solve's block operator: applied in halves (``tuning.halves``), else
+    as whole products (a zero block skipped)."""
+    if tuning.halves:
+        return BlockOperator(conv, blocks)
+    return lambda x, out=None: conv.convolve_matrix(blocks, [f if f.any() else None
+                                                             for f in x], out=out)
 
 
 def finish(op, j: JointResult, b1):
@@ -236,7 +238,7 @@ def finish(op, j: JointResult, b1):
 
 
 def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
-                       max_passes) -> JointResult:
+                       max_passes, tuning=TUNING) -> JointResult:
     """The coupled instant of the vector form under force control of W and T (uniform μ):
     one problem over x = (p, s1, s2), s = q/μ, with the bound |s| ≤ p_lag held per pass,
 
@@ -272,6 +274,8 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
         Warm starts [Pa]: pressure (N1, N2), in contact somewhere; shear (2, N1, N2).
     tol, max_iter, max_passes :
         As in :class:`contactpipe.solver.coupling.Tolerances`.
+    tuning : Tuning
+        The passes' schedule, the deferral of projection products, the halves.
 
     Returns
     -------
@@ -280,7 +284,7 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
         (p, q); ``converged`` False when a pass stopped or the passes did not settle.
     """
     k, conv = op.k, op.conv
-    A = BlockOperator(conv, [[k["33"], mu * k["31"], mu * k["32"]],
+    A = BlockOperator(conv, [[k["33"], mu * k["31"], mu * k["32"]],     # disk_cg: halves
                              [mu * k["13"], mu * mu * k["11"], mu * mu * k["12"]],
                              [mu * k["23"], mu * mu * k["21"], mu * mu * k["22"]]])
     M = op.tangential_preconditioner()
@@ -290,9 +294,9 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     b = np.stack([b[0], mu * b[1], mu * b[2]])
     p = np.maximum(np.asarray(p0, dtype=float), 0.0)
     p *= pressure.target / p.sum()
-    plan = _Schedule(tol)
+    plan = _Schedule(tol, tuning)
     x = np.concatenate([p[None], disk_start(np.asarray(q0, dtype=float) / mu, p, con,
-                                            plan.inner)])
+                                            plan.inner, tuning.snap)])
     Ax, its = A(x), 0
     for passes in range(1, max_passes + 1):
         plan.last_allowed(passes, max_passes)
@@ -310,11 +314,12 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
             if end["settled"]:
                 s_next = _final_shear(s_new, lag, p_new, con)
             else:
-                s_next = disk_start(follow_bound(s_new, lag, p_new), p_new, con, plan.inner)
+                s_next = disk_start(follow_bound(s_new, lag, p_new), p_new, con, plan.inner,
+                                    tuning.snap)
             return np.concatenate([p_new[None], s_next])
 
         res = disk_cg(A, b, x, Ax, lag, con, plan.inner, max_iter, M, a_self, unit=mu,
-                      pressure=pressure, follow=follow)
+                      pressure=pressure, follow=follow, tuning=tuning)
         its += res.iterations
         if not res.converged or end.get("sliding"):
             # sliding: no cell sticks, and the projected CG stalls on the turning circles

@@ -44,6 +44,7 @@ from .cg import (ComponentSums, Constraints, box_cg, cg_with_fallback as _cg_wit
                  disk_project, fista, project_box_sum, project_rows)
 from .blocks import DirectOperator
 from .disk_cg import disk_cg, disk_start
+from .options import TUNING
 
 __all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "disk_project",
            "project_disks_sum", "force_rows", "sliding", "slip_multipliers"]
@@ -106,7 +107,7 @@ def _miss(x, con, target, scale) -> float:
 
 
 def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
-                 precondition=True):
+                 precondition=TUNING.precondition):
     """Cattaneo-Mindlin form (q2 = 0).
 
     Parameters
@@ -172,36 +173,35 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
                             multipliers=np.zeros(0) if con is not None else None)
 
 
-def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, precondition=True,
-               exact=True):
+def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, exact=True, tuning=TUNING):
     """Full vector form by the projected CG of :func:`contactpipe.solver.disk_cg.disk_cg`
     (the fast path of :func:`solve_vector`; ``con`` the rows,
     :class:`~contactpipe.solver.cg.Constraints` on (2, N1, N2)): stick cells move freely,
     slip cells turn on their circles, the direction is the (−Δ)^½ filter shifted by the
-    circles' curvature (``precondition``; else TangCG's diagonal scaling), the line search
-    takes that curvature in.
+    circles' curvature (``tuning.precondition``; else TangCG's diagonal scaling), the line
+    search takes that curvature in.
 
     Each iteration costs one operator application (two FFT pairs; the filter half a pair
     more, and the projection's correction, where it adds up, its forward transforms:
     :func:`~contactpipe.solver.disk_cg.disk_cg`). The warm
-    start's cells within :data:`~contactpipe.solver.disk_cg.SNAP` x tol of their bound
+    start's cells within ``tuning.snap`` x tol of their bound
     start on it (:func:`~contactpipe.solver.disk_cg.disk_start`). It stops, not
-    converged, when :data:`~contactpipe.solver.disk_cg.STALL` iterations pass without
+    converged, when ``tuning.stall`` iterations pass without
     halving its best step. With ``exact`` False a converged result's A q may leave out
-    the last corrections (summed, below :data:`~contactpipe.solver.disk_cg.LAG` x tol;
+    the last corrections (summed, below ``tuning.defer`` x tol;
     so may the multipliers fitted to it): for a pass whose product the caller discards,
     this saves their forward transforms (one FFT pair).
     """
     rho = bound
-    make = getattr(op, "tangential_preconditioner", None) if precondition else None
+    make = getattr(op, "tangential_preconditioner", None) if tuning.precondition else None
     M = make() if make is not None else None
     blocks = getattr(op, "tangential_blocks", None)
     A = blocks() if blocks is not None else DirectOperator(op.tangential_vector)
-    q = disk_start(q0, rho, con, tol)
+    q = disk_start(q0, rho, con, tol, tuning.snap)
     Aq = A(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
     res = disk_cg(A, b, q, Aq, rho, con, tol, max_iter, M, op.self_influence("11"),
                   scale=max(float(rho.sum()), float(np.abs(con.target).max(initial=0.0)),
-                            1e-300), exact=exact)
+                            1e-300), exact=exact, tuning=tuning)
     Aq = res.Ax
     if res.pending is not None and not res.converged:   # exact: none once converged
         Aq = Aq + A(res.pending)
@@ -320,7 +320,7 @@ def slip_multipliers(g, q, bound, con):
 
 
 def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=None,
-                 precondition=True, exact=True):
+                 exact=True, tuning=TUNING):
     """Full vector form: disk constraint |q| ≤ μp per cell.
 
     Parameters
@@ -340,15 +340,15 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
         General rows on (2, N1, N2) in place of the force rows: the force rows, the
         torque row, both, or none (displacement control). Their multipliers are returned
         in ``multipliers``; ``domega`` is then (0, 0).
-    precondition : bool
-        The CG's direction filtered by the operator's ``tangential_preconditioner``
-        (:func:`_vector_cg`); False, or an operator without it: TangCG's diagonal scaling
-        alone.
     exact : bool
         False: a converged result's ``Aq`` and multipliers may lag the last circle
-        corrections by up to :data:`~contactpipe.solver.disk_cg.LAG` x tol
+        corrections by up to ``tuning.defer`` x tol
         (:func:`_vector_cg`), for a coupling pass that is not the last (the next pass
         recomputes its start's product anyway).
+    tuning : Tuning
+        ``precondition``: the CG's direction filtered by the operator's
+        ``tangential_preconditioner`` (:func:`_vector_cg`; False, or an operator without
+        it: TangCG's diagonal scaling alone); the vector CG's constants.
 
     Notes
     -----
@@ -362,7 +362,7 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
     scale = max(float(bound.sum()), float(np.abs(con.target).max(initial=0.0)), 1e-300)
 
     def cg(x0, Ax0, tol_, budget):
-        r = _vector_cg(op, b, bound, con, x0, tol_, budget, Ax0, precondition, exact)
+        r = _vector_cg(op, b, bound, con, x0, tol_, budget, Ax0, exact, tuning)
         return r.q, r.Aq, r.iterations, r.residual, r.converged
 
     def pg(x0, Ax0, tol_, budget):
