@@ -190,12 +190,14 @@ def test_fista_on_a_box_sum_set(seed):
     L = float(np.linalg.eigvalsh(A).max())
     project = lambda y: project_box_sum(y, lo, hi, target)  # noqa: E731
     scale = float(hi.sum())
-    x, Ax, its, err, ok = fista(lambda v: A @ v, b, project, np.zeros(7), L, 1e-12, 20000, scale)
+    o = fista(lambda v: A @ v, b, project, np.zeros(7), L, 1e-12, 20000, scale)
+    x, Ax, its, err, ok = o.x, o.Ax, o.iterations, o.residual, o.converged
     assert ok and err < 1e-12
     np.testing.assert_allclose(x, x_ex, rtol=0, atol=1e-7)
     assert np.all(x >= lo) and np.all(x <= hi) and abs(x.sum() - target) < 1e-12 * scale
     np.testing.assert_allclose(Ax, A @ x, rtol=0, atol=1e-12 * np.abs(A @ x).max())
-    *_, its, _, ok = fista(lambda v: A @ v, b, project, np.zeros(7), L, 1e-12, 3, scale)
+    o = fista(lambda v: A @ v, b, project, np.zeros(7), L, 1e-12, 3, scale)
+    its, ok = o.iterations, o.converged
     assert not ok and its == 3
 
 
@@ -498,20 +500,24 @@ def test_preconditioned_box_cg_with_rows_meets_kkt(seed):
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_box_cg_deferred_products_are_returned(seed):
-    """``update`` with ``defer``: the products of projections left out of A x come back
-    in ``pending``, A x = A (x − pending) to rounding (1e-12), n = 40 two-sided, every
-    projection deferred; with ``defer`` = 0 nothing is pending and A x = A x; with the
-    default-sized 0.1 the point is the exact one's (defer = 0) within 1e-9 of max|x|."""
+def test_box_cg_deferred_products_keep_the_contract(seed):
+    """``update`` with ``defer``, n = 40 two-sided: every projection's product deferred
+    (defer = 1e300), the result's A x is still A times its own x to rounding (1e-12 of its
+    largest): what waited is folded into the converged last step; without ``exact`` the
+    result says it has no A x (None) rather than a lagged one; with ``defer`` = 0, A x is
+    exact too; with the default-sized 0.1 the point is the exact one's (defer = 0) within
+    1e-9 of max|x|."""
     A, b, lo, hi, target = problem(300 + seed, 40, "two-sided")
     x0 = np.zeros(40)
     kw = dict(tol=1e-11, max_iter=2000, restore="shift", update=True)
-    all_ = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=1e300, **kw)
-    assert all_.pending is not None and np.any(all_.pending)
-    np.testing.assert_allclose(all_.Ax, A @ (all_.x - all_.pending), rtol=0,
-                               atol=1e-12 * np.abs(all_.Ax).max())
+    lagged = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=1e300, **kw)
+    assert lagged.converged and lagged.Ax is None
+    all_ = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=1e300, exact=True, **kw)
+    assert all_.converged
+    np.testing.assert_array_equal(all_.x, lagged.x)
+    np.testing.assert_allclose(all_.Ax, A @ all_.x, rtol=0, atol=1e-12 * np.abs(all_.Ax).max())
     exact = box_cg(lambda x: A @ x, b, lo, hi, target, x0, **kw)
-    assert exact.pending is None and exact.converged
+    assert exact.converged
     np.testing.assert_allclose(exact.Ax, A @ exact.x, rtol=0, atol=1e-12 * np.abs(exact.Ax).max())
     some = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=0.1, **kw)
     assert some.converged

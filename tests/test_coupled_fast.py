@@ -297,8 +297,9 @@ def test_follow_bound_puts_slip_cells_on_the_new_bound():
 
 def _folded(monkeypatch):
     """Wrap the joint solve's box_cg and the ledger's hand-over of deferred products: a
-    list that records, per box_cg call, whether it returned projections left out of its
-    A x, and whether deferred products were handed over to be folded into a step."""
+    list that records, per box_cg call, whether its result has an A x (the joint solve
+    asks for an exact one), and whether deferred products were handed over to be folded
+    into a step."""
     from contactpipe.solver import ledger
     seen, real, flush = [], joint.box_cg, ledger.Deferred.flush
     folded = []
@@ -306,7 +307,7 @@ def _folded(monkeypatch):
     def recorded(*a, **k):
         folded.clear()
         res = real(*a, **k)
-        seen.append((res.pending is not None, any(folded)))
+        seen.append((res.Ax is None, any(folded)))
         return res
 
     def handed(self):

@@ -44,7 +44,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .ledger import Ledger, dot as _dot
+from .fallback import Outcome, cg_with_fallback, fista
+from .ledger import Ledger, Move, dot as _dot
 
 #: Levenberg-Marquardt damping of the dual Newton step of :func:`project_rows`, relative
 #: to the Lipschitz constant of the dual's gradient: from the first value (a plain Newton
@@ -54,23 +55,23 @@ DAMPING = (1e-12, 1e4)
 #: corrected on its inside cells (:func:`_polish`) [1].
 POLISH = 1e-13
 
-__all__ = ["BlockSums", "BoxResult", "ComponentSums", "Constraints", "box_cg",
+__all__ = ["BlockSums", "BoxResult", "Outcome", "ComponentSums", "Constraints", "box_cg",
            "cg_with_fallback", "feasible_start", "fista", "project_box_sum", "project_rows",
            "box_jacobian", "box_project", "disk_jacobian", "disk_project"]
 
 
 @dataclass
 class BoxResult:
-    """Outcome of :func:`box_cg`."""
+    """Outcome of :func:`box_cg`: ``Ax`` is A times this result's own ``x``."""
 
-    x: np.ndarray          # solution
+    x: np.ndarray          # the solution, or ``follow``'s point where it moved on
     multiplier: float      # λ of the force constraint (an (m,) array with Constraints)
-    Ax: np.ndarray         # A x (kept to save a convolution for the caller)
+    Ax: np.ndarray | None  # A x (None only where ``exact`` False let corrections wait)
     iterations: int
     residual: float        # last relative change Σ|Δx| / scale
     converged: bool
-    pending: np.ndarray | None = None   # with ``defer``: Ax is A (x − pending)
-    after: np.ndarray | None = None     # ``follow``'s point, whose product Ax is
+    iterate: np.ndarray | None = None   # the CG's last iterate (x unless follow moved)
+    move: Move | None = None            # what ``follow`` decided, where it was called
 
 
 class Constraints:
@@ -706,18 +707,17 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         The x that ``Ax0`` belongs to, if not ``x0`` (A x then updated: :func:`_start`).
     update, defer, follow, exact :
         A x updated, not recomputed (:class:`~.ledger.Ledger`): projections moving x by
-        less than ``defer`` x ``tol`` in all wait, in ``BoxResult.pending`` (A x = A (x −
-        pending)) unless ``exact`` folds them into the converged last step;
-        ``follow(x) -> x′`` or None where it converges: A x is then x′'s
-        (``BoxResult.after``), the multipliers fitted to it.
+        less than ``defer`` x ``tol`` in all wait until a larger one, or the converged
+        last step (``exact``), takes them in; ``follow(x) -> Move`` where it converges:
+        the result's x is then the move's point, its A x that point's, the multipliers
+        fitted to it, ``iterate`` the converged iterate and ``move`` the decision.
+        Without ``exact`` a result with corrections still waiting has ``Ax`` None.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
         preconditioned gradient on the working set (:func:`_precondition`); the bounds,
         the rows and the stopping rule are unchanged. None: plain Polonsky-Keer CG.
 
-    Notes
-    -----
     ``converged`` is False whenever the residual or the iterate is not finite.
     """
     con = target if isinstance(target, Constraints) else None
@@ -733,7 +733,7 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
     g, gr, grw, step, x_new = (np.empty_like(x) for _ in range(5))
     G_old, working_old, err = 1.0, None, np.inf
     lam = 0.0 if con is None else np.zeros(con.m)
-    book, it = Ledger(apply, update, defer * tol, follow, exact), 0
+    book, it = Ledger(update, defer, follow, exact).bind(apply, tol), 0
     for it in range(1, max_iter + 1):
         np.add(Ax, b, out=g)
         free = bounds.free(x)
@@ -786,7 +786,8 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
             break
     Ax = book.close(x, Ax, err < tol)
     res = _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
-    res.pending, res.after = book.deferred.pending, book.after
+    res.iterate, res.move = x, book.move
+    res.x, res.Ax = book.outcome(x, Ax)
     return res
 
 
@@ -833,66 +834,3 @@ def project_box_sum(y, lo, hi, target):
     c = _shift_root(ys, ls, hs, target - float(out[~movable].sum()))
     out[movable] = np.clip(ys + c, ls, hs)
     return out
-
-
-def cg_with_fallback(cg, pg, x0, Ax0, tol, max_iter, sliding=None):
-    """CG first; where it stalls, the projected gradient to a loose tolerance (it finds the
-    slip/stick pattern that pins the multiplier), then CG again from there; the projected
-    gradient, which always converges, finishes if CG stalls a second time.
-
-    ``cg`` and ``pg`` take (x0, Ax0, tol, budget) and return (x, Ax, iterations, residual,
-    converged). Returns the same tuple, iterations summed. ``sliding(x)``, when given, says
-    that no cell of x sticks: the projected gradient then runs alone (the projected CG
-    stalls where every cell turns on its circle, as in gross slip, while the projected
-    gradient converges in a few dozen iterations there).
-    """
-    budget = max(1, max_iter // 4)
-    if sliding is not None and np.any(x0) and sliding(x0):
-        return pg(x0, Ax0, tol, max_iter)
-    x, Ax, its, err, ok = cg(x0, Ax0, tol, budget)
-    if ok:
-        return x, Ax, its, err, ok
-    x, Ax, more, err, _ = pg(x, Ax, max(tol, 1e-6), budget)
-    its += more
-    if sliding is not None and sliding(x):
-        x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
-        return x, Ax, its + more, err, ok
-    x, Ax, more, err, ok = cg(x, Ax, tol, budget)
-    its += more
-    if ok:
-        return x, Ax, its, err, ok
-    x, Ax, more, err, ok = pg(x, Ax, tol, max(1, max_iter - its))
-    return x, Ax, its + more, err, ok
-
-
-def fista(apply, b, project, x0, lipschitz, tol, max_iter, scale, Ax0=None):
-    """Accelerated projected gradient with adaptive restart, for a convex quadratic.
-
-    minimise ½ xᵀAx + bᵀx over a convex set given by its Euclidean ``project``ion
-    (Beck & Teboulle 2009; restart on objective increase, O'Donoghue & Candès 2015).
-    Always converges; used where the active-set CG cannot pin the force multiplier (every
-    cell, or nearly, at its bound). Stops on the natural residual Σ|y − P(y − ∇f/L)|/scale.
-
-    Returns (x, Ax, iterations, residual, converged).
-    """
-    x = project(x0)
-    Ax = apply(x) if (Ax0 is None or not np.array_equal(x, x0)) else Ax0
-    y, Ay, tk = x, Ax, 1.0
-    f_old = np.inf
-    err = np.inf
-    it = 0
-    for it in range(1, max_iter + 1):
-        x_new = project(y - (Ay + b) / lipschitz)
-        err = float(np.abs(x_new - y).sum()) / scale
-        Ax_new = apply(x_new)
-        if err < tol:
-            return x_new, Ax_new, it, err, True
-        f_new = 0.5 * float(np.sum(x_new * Ax_new)) + float(np.sum(b * x_new))
-        if f_new > f_old:
-            tk = 1.0
-        t_next = 0.5 * (1.0 + np.sqrt(1.0 + 4.0 * tk * tk))
-        w = (tk - 1.0) / t_next
-        y = x_new + w * (x_new - x)
-        Ay = Ax_new + w * (Ax_new - Ax)
-        x, Ax, tk, f_old = x_new, Ax_new, t_next, f_new
-    return x, Ax, it, err, False

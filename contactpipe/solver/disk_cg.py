@@ -51,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cg import BlockSums, disk_project, project_rows
-from .ledger import Ledger
+from .ledger import Ledger, Move
 from .options import TUNING
 
 __all__ = ["DiskResult", "PressureBlock", "curvature", "curved", "direction", "disk_cg",
@@ -59,13 +59,30 @@ __all__ = ["DiskResult", "PressureBlock", "curvature", "curved", "direction", "d
 
 @dataclass
 class DiskResult:
-    x: np.ndarray               # the iterate, the shape of the start
-    Ax: np.ndarray              # A x (A of ``after`` where given), less ``pending`` [m]
-    pending: np.ndarray | None  # projection corrections not yet in Ax (None: none)
+    """Outcome of :func:`disk_cg`: ``Ax`` is A times this result's own ``x``."""
+
+    x: np.ndarray               # the iterate, or ``follow``'s point where it moved on
+    Ax: np.ndarray | None       # A x [m]; None only where ``exact`` False let some wait
     iterations: int
     residual: float             # the last step's size, or the rows' miss, relative
     converged: bool
-    after: np.ndarray | None = None   # follow's point, whose product Ax is, or None
+    iterate: np.ndarray | None = None   # the CG's last iterate (x unless follow moved)
+    move: Move | None = None            # what ``follow`` decided, where it was called
+
+
+@dataclass
+class _Residual:
+    """An iteration's reduced residual and its preconditioned direction (:func:`_residual`)."""
+
+    gr: np.ndarray      # the residual less the rows' multipliers
+    gt: np.ndarray      # gr cut to the tangents on turning cells
+    z: np.ndarray       # the preconditioned direction on the working sets
+    curv: np.ndarray    # the circles' curvature (:func:`curvature`)
+    qhat: np.ndarray    # the slip directions q̂ of the cells at their bound
+    cells: tuple        # (movable, stick, turning)
+    sets: tuple         # the sets whose change restarts the conjugate sequence
+    entered: bool       # a cell re-entered its disk (or the pressure's working set)
+    lam: np.ndarray     # the rows' multipliers
 
 
 @dataclass
@@ -324,13 +341,8 @@ def _step(x, tau, t, rho, con, cells, pressure, scale, short=None):
 
 
 def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure, tuning):
-    """An iteration's reduced residual and its preconditioned direction.
-
-    ``g`` = A x + b. Returns (gr: the residual less the rows' multipliers, gt: gr cut
-    to the tangents on turning cells, z: the preconditioned direction on the working
-    sets (:func:`direction`; the pressure block's own), the circles' curvature, q̂, the
-    cells (movable, stick, turning), the sets whose change restarts the conjugate
-    sequence, whether a cell re-entered, the rows' multipliers)."""
+    """An iteration's :class:`_Residual`: ``g`` = A x + b; the direction z is
+    :func:`direction`'s on the shear, the pressure block's own on p."""
     s = x[-2:]
     mag = magnitude(s)
     at_bound = movable & (mag >= rho * (1.0 - 1e-12))
@@ -357,7 +369,7 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure,
         gt[0] = gr[0]
         z[0] = pressure.direction(M, gr[0], work)
         sets, entered = sets + (work,), entered or back
-    return gr, gt, z, curv, qhat, (movable, stick, turning), sets, entered, lam
+    return _Residual(gr, gt, z, curv, qhat, (movable, stick, turning), sets, entered, lam)
 
 
 def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
@@ -393,13 +405,13 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
     scale : float, optional
         The step's size is Σ|Δx| over it; None: over Σ|x| (the stacked joint measure).
     follow : callable, optional
-        ``follow(x) -> x′``: where the solve converges, the point the caller moves to next
-        (the next coupling pass's start, the instant's final state); its A x′ comes from
-        the last step's inverse transforms (x′ − x costs its forward transforms only).
-        Called at most once, on the converged iterate.
+        ``follow(x) -> Move``: where the solve converges, the point the caller moves to
+        next (the next coupling pass's start, the instant's final state); its A x′ comes
+        from the last step's inverse transforms (x′ − x costs its forward transforms
+        only). Called at most once, on the converged iterate.
     exact : bool
         A converged result's A x takes in every correction left out (folded into the last
-        step: their forward transforms only); False leaves them in ``pending``.
+        step: their forward transforms only); False: where some are left, A x is None.
     tuning : Tuning
         ``defer`` (the corrections left out of A x), ``stall``, ``spin``,
         ``curved_line_search`` and the filter's constants (:func:`direction`).
@@ -407,10 +419,9 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
     Returns
     -------
     DiskResult
-        ``after`` is ``follow``'s point and ``Ax`` its product where it was called;
-        ``pending`` holds the projection corrections not yet in ``Ax`` (none where it
-        converged with ``exact`` or ``follow``); the caller adds their product where it
-        needs an exact A x.
+        ``x`` is ``follow``'s point where it moved the solve on (``iterate`` the converged
+        iterate, ``move`` the decision), ``Ax`` its product; a solve that did not
+        converge takes in what its A x left out by one product.
     """
     movable = rho > 0
     rho_safe = np.where(movable, rho, 1.0)      # divides where only contact cells count
@@ -419,29 +430,29 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
     rz_old, sets_old = 1.0, None
     err, best, best_it = np.inf, np.inf, 0
     lam = np.zeros(con.m)
-    book, it = Ledger(A, True, tuning.defer * tol, follow, exact), 0
+    book, it = Ledger(True, tuning.defer, follow, exact).bind(A, tol), 0
     for it in range(1, max_iter + 1):
         if it - best_it > tuning.stall:    # no progress: leave it to the caller's fallback
             break
-        gr, gt, z, curv, qhat, cells, sets, entered, lam = _residual(
-            x, Ax + b, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure, tuning)
-        turning = cells[2]
-        rz = float(np.sum(gt * z))
+        res = _residual(x, Ax + b, rho, rho_safe, movable, con, lam, M, a_self, unit,
+                        pressure, tuning)
+        lam, turning = res.lam, res.cells[2]
+        rz = float(np.sum(res.gt * res.z))
         if not rz > 0.0:
             err = 0.0 if rz <= 0.0 else np.inf
             break
-        reset = (entered or sets_old is None
-                 or not all(np.array_equal(a, c) for a, c in zip(sets, sets_old)))
-        t = z if reset else _conjugate(t, z, rz, rz_old, gr, qhat, turning)
-        rz_old, sets_old = rz, sets
+        reset = (res.entered or sets_old is None
+                 or not all(np.array_equal(a, c) for a, c in zip(res.sets, sets_old)))
+        t = res.z if reset else _conjugate(t, res.z, rz, rz_old, res.gr, res.qhat, turning)
+        rz_old, sets_old = rz, res.sets
         tAt = book.curvature(t)[1]
-        denom = curved(tAt, t, curv) if tuning.curved_line_search else float(tAt)
+        denom = curved(tAt, t, res.curv) if tuning.curved_line_search else float(tAt)
         if denom <= 0.0:
             err = 0.0
             break
-        tau = float(np.sum(gr * t)) / denom
+        tau = float(np.sum(res.gr * t)) / denom
         short = shortened(t, tau, rho_safe, turning, tuning.spin)
-        x_new, d, err, norm = _step(x, tau, t, rho, con, cells, pressure, scale, short)
+        x_new, d, err, norm = _step(x, tau, t, rho, con, res.cells, pressure, scale, short)
         if not err >= 0.0:      # NaN: the iterate is lost
             err = np.inf
             break
@@ -469,4 +480,5 @@ def _result(book, x, Ax, rho, con, pressure, err, tol, it):
     err = max(float(err), miss)
     ok = bool(err < tol) and bool(np.all(np.isfinite(x)))
     Ax = book.close(x, Ax, ok)
-    return DiskResult(x, Ax, book.deferred.pending, it, err, ok, book.after)
+    y, Ay = book.outcome(x, Ax)
+    return DiskResult(y, Ay, it, err, ok, x, book.move)

@@ -45,6 +45,7 @@ import numpy as np
 from .blocks import BlockOperator
 from .cg import BlockSums, box_cg, disk_project, feasible_start
 from .disk_cg import PressureBlock, disk_cg, disk_start, restore_rows
+from .ledger import Move
 from .options import TUNING
 from .tangential import follow_bound, force_rows, multipliers, scalar_multiplier, sliding
 
@@ -160,21 +161,20 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         plan.last_allowed(passes, max_passes)
         lag = p                                   # the bound of s: |s| <= p (lagged)
         lo, hi = np.stack([zero, -lag]), np.stack([inf, lag])
-        end = {}
 
-        def follow(x, lag=lag, end=end):
+        def follow(x, lag=lag):
             """The converged pass's (p, s) -> the next pass's start (the slip cells on
-            their moved bound, the rows restored as box_cg would), or after the last
-            pass the instant's final state (the shear on its own pressure's bound, as
-            :func:`finish` puts it; None where it is there already)."""
-            end["settled"] = plan.settled(x[0], lag, W, cell_area)
+            their moved bound, the rows restored as box_cg would: "next"), or after the
+            last pass ("settled") the instant's final state (the shear on its own
+            pressure's bound, as :func:`finish` puts it; None where it is there)."""
             p_new = x[0]
             s_new = follow_bound(x[1], lag, p_new)
-            if end["settled"]:
+            if plan.settled(p_new, lag, W, cell_area):
                 np.clip(s_new, -p_new, p_new, out=s_new)
-                return None if np.array_equal(s_new, x[1]) else np.stack([p_new, s_new])
-            return feasible_start(np.stack([p_new, s_new]), np.stack([zero, -p_new]),
-                                  np.stack([inf, p_new]), rows, "shift")
+                return Move(None if np.array_equal(s_new, x[1]) else np.stack([p_new, s_new]),
+                            "settled")
+            return Move(feasible_start(np.stack([p_new, s_new]), np.stack([zero, -p_new]),
+                                       np.stack([inf, p_new]), rows, "shift"), "next")
 
         res = box_cg(apply, b, lo, hi, rows, x, tol=plan.inner, max_iter=max_iter,
                      restore="shift", Ax0=Ax, precondition=precondition, Ax0_of=x,
@@ -183,10 +183,9 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
                                res.residual)
-        p, s, Ax, x = res.x[0], res.x[1], res.Ax, res.after
-        if end["settled"]:
-            if x is not None:                      # the final state, folded in
-                s = x[1]
+        p, s, Ax, x = res.iterate[0], res.iterate[1], res.Ax, res.x
+        if res.move.verdict == "settled":
+            s = x[1]                               # the final state, folded in
             omega3 = float(res.multiplier[0])
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
             return JointResult(p, mu * s, mu * p, omega3, Ax, its, passes, True,
@@ -301,35 +300,36 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     for passes in range(1, max_passes + 1):
         plan.last_allowed(passes, max_passes)
         lag = x[0]                                # the bound of s: |s| <= p (lagged)
-        end = {}
 
-        def follow(xc, lag=lag, end=end):
+        def follow(xc, lag=lag):
             """The converged pass's (p, s) -> the next pass's start, its slip cells on
-            their moved bound, or the instant's final state (:func:`_final_shear`)."""
+            their moved bound ("next"), or the instant's final state ("settled",
+            :func:`_final_shear`); where no cell sticks, no move ("sliding")."""
             p_new, s_new = xc[0], xc[1:]
-            end["settled"] = plan.settled(p_new, lag, W, cell_area)
-            end["sliding"] = sliding(s_new, lag)
-            if end["sliding"]:
-                return xc
-            if end["settled"]:
+            settled = plan.settled(p_new, lag, W, cell_area)
+            if sliding(s_new, lag):
+                return Move(xc, "sliding")
+            if settled:
                 s_next = _final_shear(s_new, lag, p_new, con)
             else:
                 s_next = disk_start(follow_bound(s_new, lag, p_new), p_new, con, plan.inner,
                                     tuning.snap)
-            return np.concatenate([p_new[None], s_next])
+            return Move(np.concatenate([p_new[None], s_next]),
+                        "settled" if settled else "next")
 
         res = disk_cg(A, b, x, Ax, lag, con, plan.inner, max_iter, M, a_self, unit=mu,
                       pressure=pressure, follow=follow, tuning=tuning)
         its += res.iterations
-        if not res.converged or end.get("sliding"):
+        verdict = res.move.verdict if res.move is not None else ""
+        if not res.converged or verdict == "sliding":
             # sliding: no cell sticks, and the projected CG stalls on the turning circles
             # (a gross-slip instant took many passes: docs/design-choices.md, D2); the
             # passes' vector solves have the projected gradient for it
             y = res.x
             return JointResult(y[0], mu * y[1:], mu * lag, np.nan, res.Ax, its, passes,
                                False, res.residual if not res.converged else plan.change)
-        x, Ax = res.after, res.Ax
-        if end["settled"]:
+        x, Ax = res.x, res.Ax
+        if verdict == "settled":
             p = x[0]
             omega3 = pressure.residual(Ax[0] + b[0], p)[3]
             Ax = np.stack([Ax[0], Ax[1] / mu, Ax[2] / mu])       # (u3, u1, u2)

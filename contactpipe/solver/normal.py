@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cg import Constraints, box_cg, cg_with_fallback, fista, project_rows
+from .cg import Constraints, Outcome, box_cg, cg_with_fallback, fista, project_rows
 
 __all__ = ["COARSE_TOL", "COARSEST", "NormalControl", "NormalResult", "prolong", "restrict",
            "solve_normal"]
@@ -206,12 +206,12 @@ def solve_normal(op, gap0, W, cell_area, p0, tol, max_iter, Ap0=None,
             targets.append(force[i] / cell_area / (1.0 if i == 0 else L))
             which.append(i)
     con = Constraints(np.array(rows).reshape((len(rows),) + gap0.shape), targets)
-    x, Ax, its, err, ok, lam = _with_rows(op, b, con, p0, Ap0, tol, max_iter, fast)
+    o = _with_rows(op, b, con, p0, Ap0, tol, max_iter, fast)
     reached = motion.copy()
     for j, i in enumerate(which):
-        reached[i] = lam[j] / (1.0 if i == 0 else L)
-    return NormalResult(x, float(reached[0]), Ax, its + coarse_its, err, ok,
-                        phi=reached[1:].copy())
+        reached[i] = o.multiplier[j] / (1.0 if i == 0 else L)
+    return NormalResult(o.x, float(reached[0]), o.Ax, o.iterations + coarse_its, o.residual,
+                        o.converged, phi=reached[1:].copy())
 
 
 def _with_rows(op, b, con, p0, Ap0, tol, max_iter, fast):
@@ -221,35 +221,33 @@ def _with_rows(op, b, con, p0, Ap0, tol, max_iter, fast):
     can cycle where the rows pin the few free cells (a contact one cell wide under a
     force-controlled moment: two free cells for two rows, the pressure jumping between
     cell pairs, Σ|Δp| = 2 Σp at every step for 2000 iterations); the projected gradient
-    always converges. Returns (p, K33 p, iterations, residual, converged, the rows'
-    multipliers: the CG's, or fitted to the free cells of the projected gradient's p)."""
+    always converges. Returns an :class:`~contactpipe.solver.cg.Outcome` (p, K33 p),
+    its ``multiplier`` the rows' multipliers: the CG's, or fitted to the free cells of the
+    projected gradient's p."""
     lo, hi = np.zeros_like(b), np.full_like(b, np.inf)
     everywhere = np.ones(b.shape, dtype=bool)
-    last = {}
 
     def cg(x0, Ax0, tol_, budget):
         r = box_cg(op.normal, b, lo, hi, con, x0, tol=tol_, max_iter=budget,
                    restore="scale", Ax0=Ax0, **fast)
-        last["x"], last["lam"] = r.x, r.multiplier
-        return r.x, r.Ax, r.iterations, r.residual, r.converged
+        return Outcome(r.x, r.Ax, r.iterations, r.residual, r.converged, r.multiplier)
 
     def pg(x0, Ax0, tol_, budget):
         scale = max(float(np.abs(x0).sum()), float(np.abs(con.target).max(initial=0.0)),
                     1e-300)
-        x, Ax, its, err, ok = fista(op.normal, b,
-                                    lambda y: project_rows(y, con, everywhere, "box",
-                                                           lo=lo, hi=hi),
-                                    x0, op.normal_norm(), tol_, budget, scale, Ax0=Ax0)
-        size = max(float(np.abs(x).sum()), float(np.abs(con.target).max(initial=0.0)),
+        o = fista(op.normal, b, lambda y: project_rows(y, con, everywhere, "box", lo=lo, hi=hi),
+                  x0, op.normal_norm(), tol_, budget, scale, Ax0=Ax0)
+        size = max(float(np.abs(o.x).sum()), float(np.abs(con.target).max(initial=0.0)),
                    1e-300)
-        miss = float(np.abs(con.residual(x)).max(initial=0.0)) / size
-        return x, Ax, its, max(err, miss), ok and miss < tol_
+        miss = float(np.abs(con.residual(o.x)).max(initial=0.0)) / size
+        return Outcome(o.x, o.Ax, o.iterations, max(o.residual, miss),
+                       o.converged and miss < tol_)
 
-    x, Ax, its, err, ok = cg_with_fallback(cg, pg, p0, Ap0, tol, max_iter)
-    if last.get("x") is x:
-        return x, Ax, its, err, ok, last["lam"]
-    free = x > 0.0
-    return x, Ax, its, err, ok, (con.fit(Ax + b, free) if free.any() else np.zeros(con.m))
+    o = cg_with_fallback(cg, pg, p0, Ap0, tol, max_iter)
+    if o.multiplier is None:
+        free = o.x > 0.0
+        o.multiplier = con.fit(o.Ax + b, free) if free.any() else np.zeros(con.m)
+    return o
 
 
 def _rigid_rest(gap0, control: NormalControl) -> NormalResult:

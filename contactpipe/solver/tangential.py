@@ -40,7 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import (ComponentSums, Constraints, box_cg, cg_with_fallback as _cg_with_fallback,
+from .cg import (ComponentSums, Constraints, Outcome, box_cg,
+                 cg_with_fallback as _cg_with_fallback,
                  disk_project, fista, project_box_sum, project_rows)
 from .blocks import DirectOperator
 from .disk_cg import disk_cg, disk_start
@@ -54,7 +55,8 @@ __all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "
 class TangentialResult:
     q: np.ndarray            # (2, N1, N2) shear traction [Pa]
     domega: np.ndarray       # (2,) rigid shift increment Δω [m]
-    Aq: np.ndarray           # (2, N1, N2) A q [m] (u1 only, u2 = 0 for the scalar form)
+    Aq: np.ndarray | None    # (2, N1, N2) A q [m] (u1 only, u2 = 0 for the scalar form);
+                             # None: a vector pass that let it go (``exact`` False)
     iterations: int
     residual: float
     converged: bool
@@ -150,27 +152,31 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
     def cg(x0, Ax0, tol_, budget):
         r = box_cg(op.tangential_scalar, b1, -bound, bound, target, x0, tol=tol_,
                    max_iter=budget, restore="shift", scale=scale, Ax0=Ax0, precondition=M)
-        return r.x, r.Ax, r.iterations, r.residual, r.converged
+        return Outcome(r.x, r.Ax, r.iterations, r.residual, r.converged)
 
     def pg(x0, Ax0, tol_, budget):
         if con is not None:
             project = lambda y: np.clip(y, -bound, bound)            # noqa: E731
         else:
             project = lambda y: project_box_sum(y, -bound, bound, target)  # noqa: E731
-        x, Ax, its, err, ok = fista(op.tangential_scalar, b1, project, x0,
-                                    op.tangential_norm(1), tol_, budget, scale, Ax0=Ax0)
-        miss = _miss(x, con, target, scale)
-        return x, Ax, its, max(err, miss), ok and miss < tol_
+        o = fista(op.tangential_scalar, b1, project, x0, op.tangential_norm(1), tol_,
+                  budget, scale, Ax0=Ax0)
+        return _with_miss(o, _miss(o.x, con, target, scale), tol_)
 
-    x, Ax, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
-    lam = 0.0 if con is not None else scalar_multiplier(Ax + b1, x, bound)
+    o = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter)
+    lam = 0.0 if con is not None else scalar_multiplier(o.Ax + b1, o.x, bound)
     q = np.zeros((2,) + b1.shape)
-    q[0] = x
+    q[0] = o.x
     Aq = np.zeros_like(q)
-    Aq[0] = Ax
-    return TangentialResult(q=q, domega=np.array([lam, 0.0]), Aq=Aq, iterations=its,
-                            residual=err, converged=ok,
+    Aq[0] = o.Ax
+    return TangentialResult(q=q, domega=np.array([lam, 0.0]), Aq=Aq, iterations=o.iterations,
+                            residual=o.residual, converged=o.converged,
                             multipliers=np.zeros(0) if con is not None else None)
+
+
+def _with_miss(o, miss, tol) -> Outcome:
+    """The projected gradient's outcome judged with the rows' miss as well."""
+    return Outcome(o.x, o.Ax, o.iterations, max(o.residual, miss), o.converged and miss < tol)
 
 
 def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, exact=True, tuning=TUNING):
@@ -187,10 +193,10 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, exact=True, tunin
     start's cells within ``tuning.snap`` x tol of their bound
     start on it (:func:`~contactpipe.solver.disk_cg.disk_start`). It stops, not
     converged, when ``tuning.stall`` iterations pass without
-    halving its best step. With ``exact`` False a converged result's A q may leave out
-    the last corrections (summed, below ``tuning.defer`` x tol;
-    so may the multipliers fitted to it): for a pass whose product the caller discards,
-    this saves their forward transforms (one FFT pair).
+    halving its best step. With ``exact`` False a converged result whose last corrections
+    (summed, below ``tuning.defer`` x tol) were left out of A q has no A q (None): for a
+    pass whose product the caller discards, this saves their forward transforms (one FFT
+    pair). Returns an :class:`~contactpipe.solver.cg.Outcome` (q, A q).
     """
     rho = bound
     make = getattr(op, "tangential_preconditioner", None) if tuning.precondition else None
@@ -202,13 +208,7 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, exact=True, tunin
     res = disk_cg(A, b, q, Aq, rho, con, tol, max_iter, M, op.self_influence("11"),
                   scale=max(float(rho.sum()), float(np.abs(con.target).max(initial=0.0)),
                             1e-300), exact=exact, tuning=tuning)
-    Aq = res.Ax
-    if res.pending is not None and not res.converged:   # exact: none once converged
-        Aq = Aq + A(res.pending)
-    lam = multipliers(con, Aq + b, res.x, rho)
-    return TangentialResult(q=res.x, domega=np.zeros(2), Aq=Aq, iterations=res.iterations,
-                            residual=res.residual, converged=res.converged,
-                            multipliers=lam)
+    return Outcome(res.x, res.Ax, res.iterations, res.residual, res.converged)
 
 
 def project_disks_sum(y, rho, target):
@@ -341,8 +341,8 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
         torque row, both, or none (displacement control). Their multipliers are returned
         in ``multipliers``; ``domega`` is then (0, 0).
     exact : bool
-        False: a converged result's ``Aq`` and multipliers may lag the last circle
-        corrections by up to ``tuning.defer`` x tol
+        False: a converged result whose last circle corrections (up to ``tuning.defer``
+        x tol) were left out has ``Aq`` None and no multipliers
         (:func:`_vector_cg`), for a coupling pass that is not the last (the next pass
         recomputes its start's product anyway).
     tuning : Tuning
@@ -362,23 +362,23 @@ def solve_vector(op, b, bound, T, cell_area, q0, tol, max_iter, Aq0=None, rows=N
     scale = max(float(bound.sum()), float(np.abs(con.target).max(initial=0.0)), 1e-300)
 
     def cg(x0, Ax0, tol_, budget):
-        r = _vector_cg(op, b, bound, con, x0, tol_, budget, Ax0, exact, tuning)
-        return r.q, r.Aq, r.iterations, r.residual, r.converged
+        return _vector_cg(op, b, bound, con, x0, tol_, budget, Ax0, exact, tuning)
 
     def pg(x0, Ax0, tol_, budget):
         cells = bound > 0
-        x, Ax, its, err, ok = fista(
-            op.tangential_vector, b,
-            lambda y: project_rows(np.where(cells, y, 0.0), con, cells, "disk", rho=bound),
-            x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
-        miss = _miss(x, con, None, scale)
-        return x, Ax, its, max(err, miss), ok and miss < tol_
+        o = fista(op.tangential_vector, b,
+                  lambda y: project_rows(np.where(cells, y, 0.0), con, cells, "disk",
+                                         rho=bound),
+                  x0, op.tangential_norm(2), tol_, budget, scale, Ax0=Ax0)
+        return _with_miss(o, _miss(o.x, con, None, scale), tol_)
 
-    q, Aq, its, err, ok = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter,
-                                            lambda q: sliding(q, bound))
-    lam = multipliers(con, Aq + b, q, bound)
+    o = _cg_with_fallback(cg, pg, q0, Aq0, tol, max_iter, lambda q: sliding(q, bound))
+    # a pass whose product was let go (``exact`` False: not the instant's last) reports
+    # zero multipliers, which the next pass replaces
+    lam = np.zeros(con.m) if o.Ax is None else multipliers(con, o.Ax + b, o.x, bound)
     if rows is not None:
-        return TangentialResult(q=q, domega=np.zeros(2), Aq=Aq, iterations=its,
-                                residual=err, converged=ok, multipliers=lam)
-    return TangentialResult(q=q, domega=lam, Aq=Aq, iterations=its, residual=err,
-                            converged=ok)
+        return TangentialResult(q=o.x, domega=np.zeros(2), Aq=o.Ax, iterations=o.iterations,
+                                residual=o.residual, converged=o.converged, multipliers=lam)
+    return TangentialResult(q=o.x, domega=lam, Aq=o.Ax,
+                            iterations=o.iterations, residual=o.residual,
+                            converged=o.converged)
