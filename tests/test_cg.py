@@ -14,8 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 
-from contactpipe.solver.cg import (ComponentSums, Constraints, box_cg, fista, project_box_sum,
-                                   project_rows)
+from contactpipe.solver.cg import (BoxOptions, ComponentSums, Constraints, Start, box_cg, fista,
+                                   project_box_sum, project_rows)
+from contactpipe.solver.ledger import Ledger
 
 from helpers import box_kkt_violation, box_qp_exact, spd_matrix
 
@@ -62,8 +63,8 @@ def test_box_cg_equals_the_exact_active_set_solution(seed, kind, restore):
     (measured: 7e-16 and 3e-15 at most), converged in fewer than 100 iterations."""
     A, b, lo, hi, target = problem(seed, 7, kind)
     x_ex, lam_ex = box_qp_exact(A, b, lo, hi, target)
-    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(7), tol=1e-12, max_iter=100,
-               restore=restore)
+    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(7),
+               BoxOptions(tol=1e-12, max_iter=100, restore=restore))
     assert r.converged and r.iterations < 100 and r.residual < 1e-12
     np.testing.assert_allclose(r.x, x_ex, rtol=0, atol=1e-12 * (1 + np.abs(x_ex).max()))
     np.testing.assert_allclose(r.Ax, A @ r.x, rtol=0, atol=1e-12 * np.abs(A @ r.x).max())
@@ -79,8 +80,8 @@ def test_box_cg_keeps_fixed_cells_at_their_value():
     lo, hi = lo.copy(), hi.copy()
     lo[:2] = hi[:2] = 0.3
     x_ex, _ = box_qp_exact(A, b, lo, hi, target)
-    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(7), tol=1e-12, max_iter=100,
-               restore="shift")
+    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(7),
+               BoxOptions(tol=1e-12, max_iter=100, restore="shift"))
     assert r.converged
     assert np.all(r.x[:2] == 0.3)
     np.testing.assert_allclose(r.x, x_ex, rtol=0, atol=1e-12)
@@ -96,8 +97,8 @@ def test_box_cg_kkt_and_slsqp_on_forty_cells(seed, kind, restore):
     by more than 1e-10 |f|."""
     n = 40
     A, b, lo, hi, target = problem(100 + seed, n, kind)
-    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(n), tol=1e-13, max_iter=1000,
-               restore=restore)
+    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(n),
+               BoxOptions(tol=1e-13, max_iter=1000, restore=restore))
     assert r.converged
     assert box_kkt_violation(A, b, lo, hi, target, r.x, r.multiplier) < 1e-11
     ref = minimize(lambda x: objective(A, b, x), np.full(n, target / n),
@@ -119,18 +120,18 @@ def test_box_cg_warm_starts(kind, restore):
     off the force): the same solution within 1e-12."""
     n = 12
     A, b, lo, hi, target = problem(7, n, kind)
-    ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(n), tol=1e-13, max_iter=200,
-                 restore=restore)
+    ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(n),
+                 BoxOptions(tol=1e-13, max_iter=200, restore=restore))
     assert ref.converged
     for Ax0, calls in ((A @ ref.x, 1), (None, 2)):
         op = Counted(A)
-        r = box_cg(op, b, lo, hi, target, ref.x, tol=1e-12, max_iter=200, restore=restore,
-                   Ax0=Ax0)
+        r = box_cg(op, b, lo, hi, target, Start(ref.x, Ax0),
+                   BoxOptions(tol=1e-12, max_iter=200, restore=restore))
         assert r.converged and r.iterations == 1 and op.calls == calls
         np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-14 * (1 + np.abs(ref.x).max()))
     x0 = 5.0 * np.random.default_rng(8).standard_normal(n)
-    r = box_cg(lambda x: A @ x, b, lo, hi, target, x0, tol=1e-12, max_iter=200,
-               restore=restore)
+    r = box_cg(lambda x: A @ x, b, lo, hi, target, x0,
+               BoxOptions(tol=1e-12, max_iter=200, restore=restore))
     assert r.converged
     np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-12 * (1 + np.abs(ref.x).max()))
 
@@ -139,9 +140,10 @@ def test_box_cg_scaled_warm_start_is_one_iteration():
     """One-sided: a start proportional to the solution is restored by the Polonsky-Keer
     scaling alone (converged after one iteration, x within 1e-14)."""
     A, b, lo, hi, target = problem(9, 12, "one-sided")
-    ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(12), tol=1e-13, max_iter=200)
-    r = box_cg(lambda x: A @ x, b, lo, hi, target, 3.0 * ref.x, tol=1e-12, max_iter=200,
-               Ax0=3.0 * (A @ ref.x))
+    ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(12),
+                 BoxOptions(tol=1e-13, max_iter=200))
+    r = box_cg(lambda x: A @ x, b, lo, hi, target, Start(3.0 * ref.x, 3.0 * (A @ ref.x)),
+               BoxOptions(tol=1e-12, max_iter=200))
     assert r.converged and r.iterations == 1
     np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-14 * (1 + np.abs(ref.x).max()))
 
@@ -152,8 +154,8 @@ def test_box_cg_iteration_cap_reports_not_converged(kind, restore):
     the residual (measured 0.11 and 0.37) is above the tolerance; the iterate stays feasible
     (bounds exactly, force to 1e-12)."""
     A, b, lo, hi, target = problem(11, 40, kind)
-    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(40), tol=1e-12, max_iter=2,
-               restore=restore)
+    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(40),
+               BoxOptions(tol=1e-12, max_iter=2, restore=restore))
     assert not r.converged and r.iterations == 2 and r.residual >= 1e-12
     assert np.all(r.x >= lo) and np.all(r.x <= hi)
     assert abs(r.x.sum() - target) <= 1e-12 * np.abs(r.x).sum()
@@ -166,13 +168,13 @@ def test_box_cg_unattainable_force_is_not_converged(sign):
     |target| = Σc exactly is attainable and converges."""
     A, b, lo, hi, _ = problem(2, 12, "two-sided")
     total = float(hi.sum())
-    r = box_cg(lambda x: A @ x, b, lo, hi, sign * 1.2 * total, np.zeros(12), tol=1e-12,
-               max_iter=100, restore="shift")
+    r = box_cg(lambda x: A @ x, b, lo, hi, sign * 1.2 * total, np.zeros(12),
+               BoxOptions(tol=1e-12, max_iter=100, restore="shift"))
     assert not r.converged
     np.testing.assert_array_equal(r.x, hi if sign > 0 else lo)
     assert r.residual == pytest.approx(0.2 / 1.2, rel=1e-12)
-    r = box_cg(lambda x: A @ x, b, lo, hi, sign * total, np.zeros(12), tol=1e-12,
-               max_iter=100, restore="shift")
+    r = box_cg(lambda x: A @ x, b, lo, hi, sign * total, np.zeros(12),
+               BoxOptions(tol=1e-12, max_iter=100, restore="shift"))
     assert r.converged
     np.testing.assert_allclose(r.x, hi if sign > 0 else lo, rtol=1e-15)
 
@@ -340,8 +342,9 @@ def test_box_cg_with_rows_kkt_and_slsqp(seed, kind, m):
     optimality conditions with the multipliers hold to 1e-10 (measured <= 8e-14) and SLSQP
     (ftol 1e-15) finds the same x within 1e-6 of max|x| (measured <= 4e-8)."""
     A, b, lo, hi, C = rows_problem(seed, kind, m)
-    r = box_cg(lambda x: A @ x, b, lo, hi, C, np.zeros(40), tol=1e-13, max_iter=2000,
-               restore="scale" if kind == "one-sided" else "shift")
+    r = box_cg(lambda x: A @ x, b, lo, hi, C, np.zeros(40),
+               BoxOptions(tol=1e-13, max_iter=2000,
+                          restore="scale" if kind == "one-sided" else "shift"))
     assert r.converged and np.shape(r.multiplier) == (m,)
     assert rows_kkt_violation(A, b, lo, hi, C, r.x, r.multiplier) < 1e-10
     cons = [{"type": "eq", "fun": (lambda x, i=i: C.rows[i] @ x - C.target[i]),
@@ -358,10 +361,10 @@ def test_box_cg_one_sum_row_equals_the_force_target():
     the same x within 1e-12 of max|x| and the same multiplier (1e-12 of max|Ax + b|)."""
     for kind, restore in (("one-sided", "scale"), ("two-sided", "shift")):
         A, b, lo, hi, target = problem(3, 20, kind)
-        ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(20), tol=1e-13,
-                     max_iter=500, restore=restore)
-        r = box_cg(lambda x: A @ x, b, lo, hi, Constraints([np.ones(20)], [target]),
-                   np.zeros(20), tol=1e-13, max_iter=500, restore=restore)
+        ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(20),
+                     BoxOptions(tol=1e-13, max_iter=500, restore=restore))
+        r = box_cg(lambda x: A @ x, b, lo, hi, Constraints([np.ones(20)], [target]), np.zeros(20),
+                   BoxOptions(tol=1e-13, max_iter=500, restore=restore))
         assert r.converged and ref.converged
         np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-12 * np.abs(ref.x).max())
         g = np.abs(A @ ref.x + b).max()
@@ -374,8 +377,8 @@ def test_box_cg_without_rows_opens_entirely():
     A, _, lo, hi, _ = problem(4, 12, "one-sided")
     b = np.linspace(0.1, 1.0, 12)
     for x0 in (np.zeros(12), np.full(12, 3.0)):
-        r = box_cg(lambda x: A @ x, b, lo, hi, Constraints.none((12,)), x0, tol=1e-12,
-                   max_iter=100)
+        r = box_cg(lambda x: A @ x, b, lo, hi, Constraints.none((12,)), x0,
+                   BoxOptions(tol=1e-12, max_iter=100))
         assert r.converged and np.all(r.x == 0)
 
 
@@ -388,8 +391,8 @@ def test_box_cg_never_converges_on_nan():
         return np.full_like(x, np.nan)
 
     for t in (target, Constraints([np.ones(12)], [target]), Constraints.none((12,))):
-        r = box_cg(broken, b, lo, hi, t, np.zeros(12), tol=1e-9, max_iter=50,
-                   restore="shift")
+        r = box_cg(broken, b, lo, hi, t, np.zeros(12),
+                   BoxOptions(tol=1e-9, max_iter=50, restore="shift"))
         assert not r.converged
 
 
@@ -472,8 +475,8 @@ def test_preconditioned_box_cg_equals_the_exact_active_set_solution(seed, kind, 
     M = np.linalg.inv(A + E)
     assert np.linalg.eigvalsh(M).min() > 0 and np.abs(M @ A - np.eye(7)).max() > 1e-3
     x_ex, lam_ex = box_qp_exact(A, b, lo, hi, target)
-    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(7), tol=1e-12, max_iter=100,
-               restore=restore, precondition=lambda v: M @ v)
+    r = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(7),
+               BoxOptions(tol=1e-12, max_iter=100, restore=restore, precondition=lambda v: M @ v))
     assert r.converged and r.residual < 1e-12
     np.testing.assert_allclose(r.x, x_ex, rtol=0, atol=1e-12 * (1 + np.abs(x_ex).max()))
     np.testing.assert_allclose(r.Ax, A @ r.x, rtol=0, atol=1e-12 * np.abs(A @ r.x).max())
@@ -490,10 +493,11 @@ def test_preconditioned_box_cg_with_rows_meets_kkt(seed):
     A, b, lo, hi, _ = problem(200 + seed, n, "one-sided")
     arm = np.linspace(-1.0, 1.0, n)
     con = Constraints([np.ones(n), arm], [3.0, 0.4])
-    plain = box_cg(lambda x: A @ x, b, lo, hi, con, np.zeros(n), tol=1e-13, max_iter=2000)
+    plain = box_cg(lambda x: A @ x, b, lo, hi, con, np.zeros(n),
+                   BoxOptions(tol=1e-13, max_iter=2000))
     M = np.linalg.inv(A + np.diag(np.random.default_rng(seed).uniform(0, 5, n)))
-    fast = box_cg(lambda x: A @ x, b, lo, hi, con, np.zeros(n), tol=1e-13, max_iter=2000,
-                  precondition=lambda v: M @ v)
+    fast = box_cg(lambda x: A @ x, b, lo, hi, con, np.zeros(n),
+                  BoxOptions(tol=1e-13, max_iter=2000, precondition=lambda v: M @ v))
     assert plain.converged and fast.converged
     np.testing.assert_allclose(fast.x, plain.x, rtol=0, atol=1e-9 * np.abs(plain.x).max())
     np.testing.assert_allclose(con.residual(fast.x), 0.0, atol=1e-10 * 3.0)
@@ -509,17 +513,22 @@ def test_box_cg_deferred_products_keep_the_contract(seed):
     1e-9 of max|x|."""
     A, b, lo, hi, target = problem(300 + seed, 40, "two-sided")
     x0 = np.zeros(40)
-    kw = dict(tol=1e-11, max_iter=2000, restore="shift", update=True)
-    lagged = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=1e300, **kw)
+    opt = BoxOptions(tol=1e-11, max_iter=2000, restore="shift")
+
+    def solve(defer=0.0, exact=False):
+        return box_cg(lambda x: A @ x, b, lo, hi, target, x0, opt,
+                      Ledger(update=True, defer=defer, exact=exact))
+
+    lagged = solve(1e300)
     assert lagged.converged and lagged.Ax is None
-    all_ = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=1e300, exact=True, **kw)
+    all_ = solve(1e300, exact=True)
     assert all_.converged
     np.testing.assert_array_equal(all_.x, lagged.x)
     np.testing.assert_allclose(all_.Ax, A @ all_.x, rtol=0, atol=1e-12 * np.abs(all_.Ax).max())
-    exact = box_cg(lambda x: A @ x, b, lo, hi, target, x0, **kw)
+    exact = solve()
     assert exact.converged
     np.testing.assert_allclose(exact.Ax, A @ exact.x, rtol=0, atol=1e-12 * np.abs(exact.Ax).max())
-    some = box_cg(lambda x: A @ x, b, lo, hi, target, x0, defer=0.1, **kw)
+    some = solve(0.1)
     assert some.converged
     np.testing.assert_allclose(some.x, exact.x, rtol=0, atol=1e-9 * np.abs(exact.x).max())
 

@@ -21,7 +21,7 @@ import pytest
 import contactpipe as cp
 from contactpipe import simulation
 from contactpipe.solver import coupling, joint
-from contactpipe.solver.cg import BlockSums, box_cg
+from contactpipe.solver.cg import BlockSums, BoxOptions, box_cg
 from contactpipe.solver.coupling import Previous, follow_bound
 from contactpipe.solver.options import TUNING
 
@@ -424,8 +424,8 @@ def test_block_sums_rows():
     A = B @ B.T / m + np.eye(m)
     b = rng.normal(size=m)
     apply = lambda v: (A @ v.ravel()).reshape(2, 6, 6)
-    res = box_cg(apply, b.reshape(2, 6, 6), lo, hi, rows, np.zeros((2, 6, 6)), tol=1e-14,
-                 max_iter=5000, restore="shift")
+    res = box_cg(apply, b.reshape(2, 6, 6), lo, hi, rows, np.zeros((2, 6, 6)),
+                 BoxOptions(tol=1e-14, max_iter=5000, restore="shift"))
     assert res.converged
     assert rows.residual(res.x) == pytest.approx([0, 0], abs=1e-12)
     g = apply(res.x) + b.reshape(2, 6, 6)

@@ -77,3 +77,20 @@ def test_no_test_patches_a_solver_constant():
                 if isinstance(obj, ast.Name) and obj.id in solver and attr.isupper():
                     found.append(f"{p.name}:{node.lineno} {obj.id}.{attr}")
     assert not found, f"solver constants patched: {found}"
+
+
+MAX_CG_PARAMETERS = 8
+
+
+def test_cg_interfaces_stay_narrow():
+    """The bound-constrained CGs take the operator, the bounds, the start and a small set
+    of options (box_cg: apply, b, lo, hi, target, start, options, ledger; disk_cg: A, b,
+    start, rho, con, options, ledger, pressure): at most 8 parameters each (they took 17
+    and 15)."""
+    import inspect
+
+    from contactpipe.solver.cg import box_cg
+    from contactpipe.solver.disk_cg import disk_cg
+    counts = {f.__name__: len(inspect.signature(f).parameters) for f in (box_cg, disk_cg)}
+    assert max(counts.values()) <= MAX_CG_PARAMETERS, counts
+

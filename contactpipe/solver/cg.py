@@ -41,21 +41,17 @@ bound-constrained QP and no multiplier is fitted.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from .fallback import Outcome, cg_with_fallback, fista
+from .projection import (DAMPING, POLISH, _polish, _project_cells, _restore_by_shift,  # noqa: F401
+                         _shift_root, box_jacobian, box_project, disk_jacobian, disk_project,
+                         project_box_sum, project_rows)
 from .ledger import Ledger, Move, dot as _dot
 
-#: Levenberg-Marquardt damping of the dual Newton step of :func:`project_rows`, relative
-#: to the Lipschitz constant of the dual's gradient: from the first value (a plain Newton
-#: step, kept where it ascends) up to the last (a gradient step, which always ascends) [1].
-DAMPING = (1e-12, 1e4)
-#: A projection whose rows are off by more than this fraction of the result's size is
-#: corrected on its inside cells (:func:`_polish`) [1].
-POLISH = 1e-13
-
-__all__ = ["BlockSums", "BoxResult", "Outcome", "ComponentSums", "Constraints", "box_cg",
+__all__ = ["BlockSums", "BoxOptions", "BoxResult", "Outcome", "Start", "ComponentSums", "Constraints", "box_cg",
            "cg_with_fallback", "feasible_start", "fista", "project_box_sum", "project_rows",
            "box_jacobian", "box_project", "disk_jacobian", "disk_project"]
 
@@ -271,256 +267,6 @@ class BlockSums(Constraints):
 
 
 # --------------------------------------------------------------------------- projections
-def box_project(z, lo, hi):
-    """Clip z to [lo, hi] (the cellwise projection of the box problems); (x, inside)."""
-    x = np.clip(z, lo, hi)
-    return x, (z > lo) & (z < hi)
-
-
-def box_jacobian(z, lo, hi, inside):
-    """Cellwise derivative of the clip: 1 inside, 0 at a bound (shape of z)."""
-    return inside.astype(float)
-
-
-def disk_project(z, rho):
-    """Radial projection of each cell's vector z (2, N1, N2) onto the disk |z| <= rho.
-    Returns (x, over) with ``over`` the cells that were outside."""
-    mag = np.hypot(z[0], z[1])
-    over = mag > rho
-    if over.any():
-        f = np.where(over, rho / np.where(mag > 0, mag, 1.0), 1.0)
-        z = z * f
-    return z, over
-
-
-def disk_jacobian(z, rho, over):
-    """Cellwise Jacobian (2, 2, N1, N2) of :func:`disk_project`: I inside the disk,
-    (rho/|z|)(I − ẑẑᵀ) outside."""
-    mag = np.hypot(z[0], z[1])
-    safe = np.where(mag > 0, mag, 1.0)
-    zh = z / safe
-    f = np.where(over, rho / safe, 1.0)
-    J = np.zeros((2, 2) + z.shape[1:])
-    for i in range(2):
-        for j in range(2):
-            J[i, j] = f * ((1.0 if i == j else 0.0) - np.where(over, zh[i] * zh[j], 0.0))
-    return J
-
-
-def project_rows(y, C: Constraints, cells, kind="box", lo=None, hi=None, rho=None,
-                 max_iter=100):
-    """Euclidean projection of y on ``cells`` onto {the cellwise set, C x = f}, the other
-    cells held: x = P(y − Cᵀν) on the cells, with the multipliers ν (m,) from a dual
-    Newton iteration.
-
-    The dual ``d(ν) = ½|x(ν) − y|² + νᵀ(C x(ν) − f')`` (f' = f less what the held cells
-    carry) is concave with gradient C x(ν) − f'; each Newton step on it is damped by an
-    Levenberg-Marquardt damping, raised until the step ascends (a damped step tends to a
-    gradient step of length 1/L, which always does), so the iteration cannot run away
-    where the generalised Jacobian is near-singular (every cell on its bound or rim); a
-    step is also taken where it lowers the residual while the dual's change is below
-    rounding. Near the solution the damping falls away and the convergence is quadratic.
-
-    Parameters
-    ----------
-    y : ndarray
-        (N1, N2) for ``kind = "box"``, (2, N1, N2) for ``"disk"``.
-    C : Constraints
-    cells : ndarray of bool (N1, N2)
-        The cells that move.
-    kind : {"box", "disk"}
-        lo <= x <= hi per cell, or |x| <= rho per cell.
-
-    Returns
-    -------
-    ndarray
-        The projection (y where ``cells`` is False). When no point of the set meets the
-        rows (the target lies beyond a supporting plane of what the cells can carry,
-        checked at every step along the residual) the iteration stops with the best it
-        reached.
-    """
-    x = y.copy()
-    if C.m == 0 or not np.any(cells):
-        return _project_cells(x, cells, kind, lo, hi, rho)
-    ys = y[..., cells]
-    Cs = C._on(cells)                                        # (m, k)
-    held = ~cells
-    f = C.target - C.sums_of(np.where(held, y, 0.0))
-    if kind == "box":
-        ls, hs = lo[cells], hi[cells]
-
-        def proj(z):
-            return box_project(z, ls, hs)
-
-        def support(u):
-            v = u @ Cs                                        # (k,)
-            return float(np.sum(np.maximum(ls * v, np.where(np.isfinite(hs), hs * v,
-                                                            np.where(v > 0, np.inf, 0.0)))))
-
-        def jac(z, inside):
-            d = box_jacobian(z, ls, hs, inside)
-            return (Cs * d) @ Cs.T
-    else:
-        rs = rho[cells]
-
-        def proj(z):
-            return disk_project(z, rs)
-
-        def support(u):
-            v = (u @ Cs).reshape(2, -1)                       # (2, k)
-            return float(np.sum(rs * np.hypot(v[0], v[1])))
-
-        def jac(z, over):
-            J = disk_jacobian(z, rs, over)
-            A = Cs.reshape(C.m, 2, -1)
-            return np.einsum("aik,ijk,bjk->ab", A, J, A)
-
-    def dual(nu):
-        z = ys - (nu @ Cs).reshape(ys.shape)
-        xs, flag = proj(z)
-        F = Cs @ xs.reshape(-1) - f
-        return z, xs, flag, F, 0.5 * float(np.sum((xs - ys) ** 2)) + float(nu @ F)
-
-    scale = float(np.abs(f).max() + np.abs(ys).sum() + np.abs(Cs).max()) + 1e-300
-    lipschitz = max(float(np.linalg.eigvalsh(Cs @ Cs.T).max()), 1e-300)
-    nu = np.zeros(C.m)
-    z, xs, flag, F, d = dual(nu)
-    damping = DAMPING[0]
-    for _ in range(max_iter):
-        size = float(np.abs(F).max())
-        if size <= 1e-14 * scale:
-            break
-        u = -F / np.linalg.norm(F)
-        if float(u @ f) > support(u) + 1e-12 * scale:
-            break                     # beyond what the cells can carry: no projection
-        J = jac(z, flag)
-        while damping <= DAMPING[1]:
-            step = np.linalg.solve(J + damping * lipschitz * np.eye(C.m), F)
-            trial = dual(nu + step)
-            # ascent of the dual, or (where its change is below rounding) of the residual
-            flat = abs(trial[4] - d) <= 1e-13 * (abs(d) + abs(trial[4]))
-            if trial[4] >= d + 1e-4 * float(F @ step) or \
-                    (flat and float(np.abs(trial[3]).max()) <= (1.0 - 1e-4) * size):
-                damping = max(damping / 10.0, DAMPING[0])
-                break
-            damping *= 10.0
-        else:
-            break
-        nu = nu + step
-        z, xs, flag, F, d = trial
-    x[..., cells] = _polish(xs, Cs, f, flag if kind == "box" else ~flag, kind, ls
-                            if kind == "box" else None, hs if kind == "box" else None,
-                            rs if kind != "box" else None)
-    return x
-
-
-def _polish(xs, Cs, f, inside, kind, ls, hs, rs):
-    """xs with the rows' residual C xs − f taken off its cells strictly inside their
-    sets by the least-norm correction, where that keeps them inside.
-
-    The dual iteration computes xs = P(ys − Cᵀν): where the step that made ys overshot
-    far (ys a million times the rows' targets, as after the first step of a cold start),
-    its rounding and its stopping rule, both relative to |ys|, leave the rows off by
-    1e-8 of the target, which the CG's directions then keep (they do not change C x)
-    and the solve cannot converge. The correction is relative to xs itself."""
-    F = Cs @ xs.reshape(-1) - f
-    size = float(np.abs(F).max())
-    if size <= POLISH * (float(np.abs(f).max()) + float(np.abs(xs).sum())):
-        return xs                      # as exact as xs allows: kept bit for bit
-    mask = np.broadcast_to(inside, xs.shape).reshape(-1)
-    if not mask.any():
-        return xs
-    Ci = Cs[:, mask]
-    corr = Ci.T @ np.linalg.lstsq(Ci @ Ci.T, F, rcond=None)[0]
-    out = xs.reshape(-1).copy()
-    out[mask] -= corr
-    out = out.reshape(xs.shape)
-    if kind == "box":
-        ok = np.all((out[inside] > ls[inside]) & (out[inside] < hs[inside]))
-    else:
-        ok = np.all(np.hypot(out[0], out[1])[inside] < rs[inside])
-    if not ok or not np.all(np.isfinite(out)):
-        return xs
-    return out if float(np.abs(Cs @ out.reshape(-1) - f).max()) < size else xs
-
-
-def _project_cells(x, cells, kind, lo, hi, rho):
-    """The cellwise projection of ``cells`` (no row to keep)."""
-    if kind == "box":
-        x[cells] = np.clip(x[cells], lo[cells], hi[cells])
-    else:
-        x[:, cells] = disk_project(x[:, cells], rho[cells])[0]
-    return x
-
-def _shift_root(xs, ls, hs, need):
-    """c with Σ clip(xs + c, ls, hs) = need (clipped to the attainable range).
-
-    The function is monotone and piecewise linear in c: Newton steps (slope = the number
-    of cells strictly inside their bounds) inside a bracket, bisection when a step leaves
-    it or no cell is inside. Finite termination up to rounding.
-    """
-    lo_sum, hi_sum = ls.sum(), hs.sum()
-    if need <= lo_sum:
-        return -np.inf
-    if need >= hi_sum:
-        return np.inf
-    c_lo = float(np.min(ls - xs))                     # every cell at its lower bound
-    finite_hi = np.isfinite(hs)
-    if finite_hi.all():
-        c_hi = float(np.max(hs - xs))                 # every cell at its upper bound
-    else:                                             # one-sided: grow until enough
-        c_hi = max(1.0, float(np.abs(xs).max()))
-        while np.clip(xs + c_hi, ls, hs).sum() < need:
-            c_hi *= 2.0
-    c = min(max(0.0, c_lo), c_hi)
-    for _ in range(200):
-        y = np.clip(xs + c, ls, hs)
-        f = y.sum() - need
-        # relative to the clipped values: xs may be far outside the bounds (a projection)
-        if abs(f) <= 1e-14 * (abs(need) + np.abs(y).sum() + 1e-300):
-            break
-        if f > 0:
-            c_hi = c
-        else:
-            c_lo = c
-        inside = np.count_nonzero((xs + c > ls) & (xs + c < hs))
-        c_new = c - f / inside if inside else np.nan
-        if not (c_lo < c_new < c_hi):
-            c_new = 0.5 * (c_lo + c_hi)
-        if c_new == c:
-            break
-        c = c_new
-    return c
-
-
-def _restore_by_shift(x, lo, hi, target, free):
-    """Shift the free cells by one constant (clipped to their bounds) so that Σx = target;
-    when the free cells cannot carry it, every cell with room is shifted. An x whose sum
-    already holds to the shift's own acceptance (1e-12 of Σ|x|: off by the rounding of
-    the steps only) is returned as it is, so that its A x needs no update."""
-    def holds(y):
-        return abs(float(y.sum()) - target) <= 1e-12 * (abs(target) + float(np.abs(y).sum()))
-
-    if holds(x):
-        return x
-    out = x
-    for cells in (free, lo < hi):
-        if not cells.any():
-            continue
-        xs, ls, hs = x[cells], lo[cells], hi[cells]
-        need = target - (x.sum() - xs.sum())
-        # the plain shift first: where it leaves every cell strictly inside its bounds it
-        # is the root itself (Σ(xs + c) = need), and the root-finder is not needed
-        ys = xs + (need - xs.sum()) / xs.size
-        if not ((ys > ls).all() and (ys < hs).all()):
-            ys = np.clip(xs + _shift_root(xs, ls, hs, need), ls, hs)
-        out = x.copy()
-        out[cells] = ys
-        if holds(out):
-            return out
-    return out
-
-
 def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0, Ax0_of=None):
     """The first iterate (the constraints restored) and its A x.
 
@@ -669,28 +415,27 @@ def _precondition(M, gr, working, con):
     return z
 
 
-def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale",
-           scale=None, Ax0=None, precondition=None, Ax0_of=None,
-           update=False, defer=0.0, follow=None, exact=False) -> BoxResult:
-    """Solve the bound- and force-constrained quadratic problem described in the module doc.
+@dataclass(frozen=True)
+class Start:
+    """A CG's start: ``x`` [Pa], and its product ``Ax`` [m] where known (saves one FFT
+    pair); ``of`` the point ``Ax`` belongs to where that is not x (A x is then updated,
+    A x = Ax + A (x − of): :func:`_start`)."""
 
-    Parameters
+    x: np.ndarray
+    Ax: np.ndarray | None = None
+    of: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class BoxOptions:
+    """The options of :func:`box_cg`.
+
+    Attributes
     ----------
-    apply : callable
-        ``apply(x) -> A x`` (one FFT pair per call); a
-        :class:`~contactpipe.solver.blocks.BlockOperator` is applied in halves with
-        ``update`` (a projection's correction then costs its forward transforms only).
-    b : ndarray
-        Known linear term (same shape as x) [m].
-    lo, hi : ndarray
-        Per-cell bounds [Pa]; ``lo == hi`` fixes a cell. ``hi`` may be ``inf``.
-    target : float or Constraints
-        Required Σx [Pa] (force / cell area); or general rows C x = f (up to three, none
-        for displacement control), whose multipliers are returned as an (m,) array.
-    x0 : ndarray
-        Warm start [Pa]; projected onto the constraints first.
     tol : float
         Stop when Σ|x_new − x_old| / scale < tol.
+    max_iter : int
+        Iterations allowed.
     restore : {"scale", "shift"}
         How the force is restored after a projection: Polonsky-Keer scaling (only for
         lo = 0, hi = ∞) or a clipped shift of the free cells (two-sided bounds). With
@@ -701,94 +446,166 @@ def box_cg(apply, b, lo, hi, target, x0, tol=1e-9, max_iter=1000, restore="scale
         Normaliser of the convergence measure [Pa]; default |target| (with
         :class:`Constraints`: Σ|x| of the iterate, so that the change is relative, and a
         contact that opens entirely, x = 0, converges).
-    Ax0 : ndarray, optional
-        ``A x0`` if already known (saves one FFT pair).
-    Ax0_of : ndarray, optional
-        The x that ``Ax0`` belongs to, if not ``x0`` (A x then updated: :func:`_start`).
-    update, defer, follow, exact :
-        A x updated, not recomputed (:class:`~.ledger.Ledger`): projections moving x by
-        less than ``defer`` x ``tol`` in all wait until a larger one, or the converged
-        last step (``exact``), takes them in; ``follow(x) -> Move`` where it converges:
-        the result's x is then the move's point, its A x that point's, the multipliers
-        fitted to it, ``iterate`` the converged iterate and ``move`` the decision.
-        Without ``exact`` a result with corrections still waiting has ``Ax`` None.
     precondition : callable, optional
         ``M(v) -> z``, a symmetric positive definite approximation of A⁻¹ (one FFT pair
         per call for a spectral one). The search directions are then built from the
         preconditioned gradient on the working set (:func:`_precondition`); the bounds,
         the rows and the stopping rule are unchanged. None: plain Polonsky-Keer CG.
-
-    ``converged`` is False whenever the residual or the iterate is not finite.
     """
-    con = target if isinstance(target, Constraints) else None
-    bounds = _Bounds(lo, hi)
-    movable = bounds.movable
-    x, Ax = _start(x0, lo, hi, target, restore, con, movable, apply, Ax0, Ax0_of)
-    if Ax is Ax0:
-        Ax = np.array(Ax, dtype=float)            # updated in place below
-    relative = scale is None and con is not None
-    if scale is None and con is None:
-        scale = max(abs(target), 1e-300)
-    t = np.zeros_like(x)            # preallocated: the element-wise work runs in place
-    g, gr, grw, step, x_new = (np.empty_like(x) for _ in range(5))
-    G_old, working_old, err = 1.0, None, np.inf
-    lam = 0.0 if con is None else np.zeros(con.m)
-    book, it = Ledger(update, defer, follow, exact).bind(apply, tol), 0
-    for it in range(1, max_iter + 1):
-        np.add(Ax, b, out=g)
-        free = bounds.free(x)
-        lam = _fit(con, g, free, movable, buf=step)
+
+    tol: float = 1e-9
+    max_iter: int = 1000
+    restore: str = "scale"
+    scale: float | None = None
+    precondition: Callable | None = None
+
+
+def box_cg(apply, b, lo, hi, target, start, options=BoxOptions(),
+           ledger: Ledger | None = None) -> BoxResult:
+    """Solve the bound- and force-constrained quadratic problem described in the module doc.
+
+    Parameters
+    ----------
+    apply : callable
+        ``apply(x) -> A x`` (one FFT pair per call); a
+        :class:`~contactpipe.solver.blocks.BlockOperator` is applied in halves where the
+        ledger updates A x (a projection's correction then costs its forward transforms
+        only).
+    b : ndarray
+        Known linear term (same shape as x) [m].
+    lo, hi : ndarray
+        Per-cell bounds [Pa]; ``lo == hi`` fixes a cell. ``hi`` may be ``inf``.
+    target : float or Constraints
+        Required Σx [Pa] (force / cell area); or general rows C x = f (up to three, none
+        for displacement control), whose multipliers are returned as an (m,) array.
+    start : Start or ndarray
+        Warm start [Pa] (with its A x where known); projected onto the constraints first.
+    options : BoxOptions
+        Tolerance, iterations, how the force is restored, the scale, the preconditioner.
+    ledger : Ledger, optional
+        A x updated, not recomputed (:class:`~.ledger.Ledger`): projections moving x by
+        less than its ``defer`` x ``tol`` in all wait until a larger one, or the
+        converged last step (``exact``), takes them in; its ``follow(x) -> Move`` where
+        it converges: the result's x is then the move's point, its A x that point's,
+        the multipliers fitted to it, ``iterate`` the converged iterate and ``move`` the
+        decision. Without ``exact`` a result with corrections still waiting has ``Ax``
+        None. None: A x recomputed after each projection.
+
+    Returns
+    -------
+    BoxResult
+        ``Ax`` is A times its own ``x``; ``converged`` is False whenever the residual or
+        the iterate is not finite.
+    """
+    solve = _BoxSolve(apply, b, lo, hi, target, start if isinstance(start, Start)
+                      else Start(start), options, ledger if ledger is not None else Ledger())
+    return solve.result(*solve.run())
+
+
+class _BoxSolve:
+    """One :func:`box_cg` solve: its iterate x, A x, the last direction t and the
+    scratch fields its element-wise work runs in place in."""
+
+    def __init__(self, apply, b, lo, hi, target, start, opt, ledger):
+        self.apply, self.b, self.lo, self.hi, self.target, self.opt = \
+            apply, b, lo, hi, target, opt
+        self.con = con = target if isinstance(target, Constraints) else None
+        self.bounds = _Bounds(lo, hi)
+        x, Ax = _start(start.x, lo, hi, target, opt.restore, con, self.bounds.movable,
+                       apply, start.Ax, start.of)
+        if Ax is start.Ax:
+            Ax = np.array(Ax, dtype=float)            # updated in place below
+        self.x, self.Ax = x, Ax
+        self.relative = opt.scale is None and con is not None
+        self.scale = max(abs(target), 1e-300) if opt.scale is None and con is None \
+            else opt.scale
+        self.t = np.zeros_like(x)
+        self.g, self.gr, self.grw, self.buf, self.x_new = (np.empty_like(x) for _ in range(5))
+        self.lam = 0.0 if con is None else np.zeros(con.m)
+        self.book = ledger.bind(apply, opt.tol)
+
+    def run(self):
+        """The iteration: (the last relative step, or 0 / inf where it ended early;
+        the iterations)."""
+        t, grw, M, tol = self.t, self.grw, self.opt.precondition, self.opt.tol
+        G_old, working_old, err, it = 1.0, None, np.inf, 0
+        for it in range(1, self.opt.max_iter + 1):
+            working, moved = self._working_set()
+            if not working.any():
+                return 0.0, it
+            np.multiply(self.gr, working, out=grw)  # the reduced gradient on the working set
+            z = grw if M is None else _precondition(M, grw, working, self.con)
+            G = _dot(grw, z)
+            if not np.isfinite(G):
+                return np.inf, it
+            if moved or working_old is None or not np.array_equal(working, working_old):
+                np.copyto(t, z)                     # conjugacy reset
+            else:                                   # t is already 0 off the working set
+                t *= G / G_old
+                t += z
+            G_old, working_old = max(G, 1e-300), working
+            r, denom = self.book.curvature(t)
+            if denom <= 0.0:
+                return 0.0, it
+            err = self._step(r, _dot(grw, t) / denom)
+            if not err >= 0.0:                      # NaN: the iterate is lost
+                return np.inf, it
+            if err < tol:
+                break
+        return err, it
+
+    def _working_set(self):
+        """(the working set, whether a cell re-entered it): the free cells and those at a
+        bound whose reduced gradient (left in ``gr``) points inwards, the multipliers
+        fitted to them."""
+        g, gr, con, bounds, movable = self.g, self.gr, self.con, self.bounds, \
+            self.bounds.movable
+        np.add(self.Ax, self.b, out=g)
+        free = bounds.free(self.x)
+        lam = _fit(con, g, free, movable, buf=self.buf)
         _reduce(g, lam, con, gr)
-        released = bounds.released(x, gr, free)
+        released = bounds.released(self.x, gr, free)
         moved = bool(released.any())
         working = (free | released) if moved else free
         if moved:                               # λ on the whole working set: Σ_W gr = 0
-            lam = _fit(con, g, free, movable, cells=working, buf=step)
+            lam = _fit(con, g, free, movable, cells=working, buf=self.buf)
             _reduce(g, lam, con, gr)
-        if not working.any():
-            err = 0.0
-            break
-        np.multiply(gr, working, out=grw)       # the reduced gradient on the working set
-        z = grw if precondition is None else _precondition(precondition, grw, working, con)
-        G = _dot(grw, z)
-        if not np.isfinite(G):
-            err = np.inf
-            break
-        if moved or working_old is None or not np.array_equal(working, working_old):
-            np.copyto(t, z)                     # conjugacy reset
-        else:                                   # t is already 0 off the working set
-            t *= G / G_old
-            t += z
-        G_old = max(G, 1e-300)
-        working_old = working
-        r, denom = book.curvature(t)
-        if denom <= 0.0:
-            err = 0.0
-            break
-        tau = _dot(grw, t) / denom
-        np.subtract(x, np.multiply(t, tau, out=step), out=x_new)
-        if bounds.outside(x_new):
-            projected = _project_iterate(x_new, lo, hi, target, restore, con, movable)
-            norm = max(float(np.abs(projected).sum()), 1e-300) if relative else scale
+        self.lam = lam
+        return working, moved
+
+    def _step(self, r, tau):
+        """x − τ t, projected where it left the bounds, and A x with it (``r``: A t, or
+        None where the ledger keeps it in spectra); returns the step's relative size."""
+        x, t, buf, x_new, book = self.x, self.t, self.buf, self.x_new, self.book
+        done = self.opt.tol
+        np.subtract(x, np.multiply(t, tau, out=buf), out=x_new)
+        if self.bounds.outside(x_new):
+            projected = _project_iterate(x_new, self.lo, self.hi, self.target,
+                                         self.opt.restore, self.con, self.bounds.movable)
+            norm = max(float(np.abs(projected).sum()), 1e-300) if self.relative \
+                else self.scale
             err = _change(projected, x, norm)
-            if update:                          # A x += A(−τ t + d), d the correction
-                book.advance(Ax, r, tau, step, projected, err < tol,
+            if book.update:                     # A x += A(−τ t + d), d the correction
+                book.advance(self.Ax, r, tau, buf, projected, err < done,
                              np.subtract(projected, x_new, out=x_new), norm)
-            x, Ax = projected, (Ax if update else apply(projected))
+            self.x = projected
+            if not book.update:
+                self.Ax = self.apply(projected)
         else:                                   # x_new − x = −τ t exactly
-            err = _step_change(tau, t, x_new, None if relative else scale, step)
-            x, x_new = x_new, x
-            book.advance(Ax, r, tau, step, x, err < tol)
-        if not err >= 0.0:                      # NaN: the iterate is lost
-            err = np.inf
-            break
-        if err < tol:
-            break
-    Ax = book.close(x, Ax, err < tol)
-    res = _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale)
-    res.iterate, res.move = x, book.move
-    res.x, res.Ax = book.outcome(x, Ax)
-    return res
+            err = _step_change(tau, t, x_new, None if self.relative else self.scale, buf)
+            self.x, self.x_new = x_new, x
+            book.advance(self.Ax, r, tau, buf, x_new, err < done)
+        return err
+
+    def result(self, err, it) -> BoxResult:
+        """The result (:func:`_finish`), A x moved to ``follow``'s point where it moved."""
+        x, tol = self.x, self.opt.tol
+        Ax = self.book.close(x, self.Ax, err < tol)
+        res = _finish(x, Ax, self.b, self.lo, self.hi, self.target, self.con, self.lam, err,
+                      tol, it, self.relative, self.scale)
+        res.iterate, res.move = x, self.book.move
+        res.x, res.Ax = self.book.outcome(x, Ax)
+        return res
 
 
 def _step_change(tau, t, x_new, scale, buf) -> float:
@@ -823,14 +640,3 @@ def _finish(x, Ax, b, lo, hi, target, con, lam, err, tol, it, relative, scale) -
     ok = bool(err < tol) and bool(np.all(np.isfinite(x)))
     return BoxResult(x=x, multiplier=lam if con is not None else float(lam), Ax=Ax,
                      iterations=it, residual=err, converged=ok)
-
-
-def project_box_sum(y, lo, hi, target):
-    """Euclidean projection of y onto {lo ≤ x ≤ hi, Σx = target}: x = clip(y + c) with the
-    scalar c from the bracketed root-finder :func:`_shift_root`."""
-    movable = lo < hi
-    out = np.clip(y, lo, hi)
-    ys, ls, hs = y[movable], lo[movable], hi[movable]
-    c = _shift_root(ys, ls, hs, target - float(out[~movable].sum()))
-    out[movable] = np.clip(ys + c, ls, hs)
-    return out

@@ -47,14 +47,15 @@ pass's start, the instant's final state) ride on the last step the same way.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from .cg import BlockSums, disk_project, project_rows
 from .ledger import Ledger, Move
-from .options import TUNING
+from .options import TUNING, Tuning
 
-__all__ = ["DiskResult", "PressureBlock", "curvature", "curved", "direction", "disk_cg",
+__all__ = ["DiskOptions", "DiskResult", "PressureBlock", "curvature", "curved", "direction", "disk_cg",
            "disk_start", "magnitude", "restore_rows", "shortened", "slip_axes"]
 
 @dataclass
@@ -372,26 +373,12 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure,
     return _Residual(gr, gt, z, curv, qhat, (movable, stick, turning), sets, entered, lam)
 
 
-def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
-            pressure: PressureBlock | None = None, scale=None, follow=None,
-            exact=True, tuning=TUNING) -> DiskResult:
-    """The projected CG (module notes) from a feasible start.
+@dataclass(frozen=True)
+class DiskOptions:
+    """The options of :func:`disk_cg`.
 
-    Parameters
+    Attributes
     ----------
-    A : BlockOperator
-        x ↦ A x, applied in halves (:class:`contactpipe.solver.blocks.BlockOperator`).
-    b : ndarray
-        The linear term, x's shape [m].
-    x : ndarray (2, N1, N2), or (3, N1, N2) with a pressure block first
-        Start: the shear within its disks and on its rows (:func:`disk_start`), the
-        pressure ≥ 0 on its row.
-    Ax : ndarray
-        A x of the start [m].
-    rho : ndarray (N1, N2)
-        The shear's bound, in its unit (μp for q, p_lag for s = q/μ).
-    con : Constraints
-        The shear's rows on (2, N1, N2).
     tol, max_iter :
         Relative step size at which it stops; iterations allowed.
     M : callable, optional
@@ -400,21 +387,52 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
         K11's self-influence [m/Pa].
     unit : float
         q per unit of the shear variable (μ for s = q/μ, 1 for q) [Pa/unit].
-    pressure : PressureBlock, optional
-        x[0] is the pressure.
     scale : float, optional
         The step's size is Σ|Δx| over it; None: over Σ|x| (the stacked joint measure).
-    follow : callable, optional
-        ``follow(x) -> Move``: where the solve converges, the point the caller moves to
-        next (the next coupling pass's start, the instant's final state); its A x′ comes
-        from the last step's inverse transforms (x′ − x costs its forward transforms
-        only). Called at most once, on the converged iterate.
-    exact : bool
-        A converged result's A x takes in every correction left out (folded into the last
-        step: their forward transforms only); False: where some are left, A x is None.
     tuning : Tuning
-        ``defer`` (the corrections left out of A x), ``stall``, ``spin``,
+        ``defer`` (the default ledger's deferral), ``stall``, ``spin``,
         ``curved_line_search`` and the filter's constants (:func:`direction`).
+    """
+
+    tol: float
+    max_iter: int
+    M: Callable | None = None
+    a_self: float = 0.0
+    unit: float = 1.0
+    scale: float | None = None
+    tuning: Tuning = TUNING
+
+
+def disk_cg(A, b, start, rho, con, options: DiskOptions, ledger: Ledger | None = None,
+            pressure: PressureBlock | None = None) -> DiskResult:
+    """The projected CG (module notes) from a feasible start.
+
+    Parameters
+    ----------
+    A : BlockOperator
+        x ↦ A x, applied in halves (:class:`contactpipe.solver.blocks.BlockOperator`).
+    b : ndarray
+        The linear term, x's shape [m].
+    start : Start
+        x (2, N1, N2), or (3, N1, N2) with a pressure block first: the shear within its
+        disks and on its rows (:func:`disk_start`), the pressure ≥ 0 on its row; and its
+        A x [m].
+    rho : ndarray (N1, N2)
+        The shear's bound, in its unit (μp for q, p_lag for s = q/μ).
+    con : Constraints
+        The shear's rows on (2, N1, N2).
+    options : DiskOptions
+        Tolerance, iterations, the filter, the scale, the tuning.
+    ledger : Ledger, optional
+        A x's bookkeeping (:class:`~.ledger.Ledger`; default: updated, corrections
+        deferred by ``options.tuning.defer``, exact). Its ``follow(x) -> Move``: where
+        the solve converges, the point the caller moves to next (the next coupling pass's
+        start, the instant's final state), whose A x′ comes from the last step's inverse
+        transforms (x′ − x costs its forward transforms only). With ``exact`` a
+        converged result's A x takes in every correction left out (folded into the last
+        step); without it, where some are left, A x is None.
+    pressure : PressureBlock, optional
+        x[0] is the pressure.
 
     Returns
     -------
@@ -423,14 +441,18 @@ def disk_cg(A, b, x, Ax, rho, con, tol, max_iter, M=None, a_self=0.0, unit=1.0,
         iterate, ``move`` the decision), ``Ax`` its product; a solve that did not
         converge takes in what its A x left out by one product.
     """
+    if ledger is None:
+        ledger = Ledger(update=True, defer=options.tuning.defer)
+    x, tol, max_iter, tuning = start.x, options.tol, options.max_iter, options.tuning
+    M, a_self, unit, scale = options.M, options.a_self, options.unit, options.scale
     movable = rho > 0
     rho_safe = np.where(movable, rho, 1.0)      # divides where only contact cells count
-    Ax = np.array(Ax, dtype=float)              # updated in place
+    Ax = np.array(start.Ax, dtype=float)        # updated in place
     t = np.zeros_like(x)
     rz_old, sets_old = 1.0, None
     err, best, best_it = np.inf, np.inf, 0
     lam = np.zeros(con.m)
-    book, it = Ledger(True, tuning.defer, follow, exact).bind(A, tol), 0
+    book, it = ledger.bind(A, tol), 0
     for it in range(1, max_iter + 1):
         if it - best_it > tuning.stall:    # no progress: leave it to the caller's fallback
             break

@@ -43,9 +43,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .blocks import BlockOperator
-from .cg import BlockSums, box_cg, disk_project, feasible_start
-from .disk_cg import PressureBlock, disk_cg, disk_start, restore_rows
-from .ledger import Move
+from .cg import BlockSums, BoxOptions, Start, box_cg, disk_project, feasible_start
+from .disk_cg import DiskOptions, PressureBlock, disk_cg, disk_start, restore_rows
+from .ledger import Ledger, Move
 from .options import TUNING
 from .tangential import follow_bound, force_rows, multipliers, scalar_multiplier, sliding
 
@@ -176,9 +176,9 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
             return Move(feasible_start(np.stack([p_new, s_new]), np.stack([zero, -p_new]),
                                        np.stack([inf, p_new]), rows, "shift"), "next")
 
-        res = box_cg(apply, b, lo, hi, rows, x, tol=plan.inner, max_iter=max_iter,
-                     restore="shift", Ax0=Ax, precondition=precondition, Ax0_of=x,
-                     update=True, defer=tuning.defer, follow=follow, exact=True)
+        res = box_cg(apply, b, lo, hi, rows, Start(x, Ax, x),
+                     BoxOptions(plan.inner, max_iter, "shift", precondition=precondition),
+                     Ledger(update=True, defer=tuning.defer, follow=follow, exact=True))
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
@@ -317,8 +317,9 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
             return Move(np.concatenate([p_new[None], s_next]),
                         "settled" if settled else "next")
 
-        res = disk_cg(A, b, x, Ax, lag, con, plan.inner, max_iter, M, a_self, unit=mu,
-                      pressure=pressure, follow=follow, tuning=tuning)
+        res = disk_cg(A, b, Start(x, Ax), lag, con,
+                      DiskOptions(plan.inner, max_iter, M, a_self, unit=mu, tuning=tuning),
+                      Ledger(update=True, defer=tuning.defer, follow=follow), pressure)
         its += res.iterations
         verdict = res.move.verdict if res.move is not None else ""
         if not res.converged or verdict == "sliding":

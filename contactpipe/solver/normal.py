@@ -34,7 +34,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cg import Constraints, Outcome, box_cg, cg_with_fallback, fista, project_rows
+from .cg import (BoxOptions, Constraints, Outcome, Start, box_cg, cg_with_fallback, fista,
+                 project_rows)
 
 __all__ = ["COARSE_TOL", "COARSEST", "NormalControl", "NormalResult", "prolong", "restrict",
            "solve_normal"]
@@ -228,8 +229,8 @@ def _with_rows(op, b, con, p0, Ap0, tol, max_iter, fast):
     everywhere = np.ones(b.shape, dtype=bool)
 
     def cg(x0, Ax0, tol_, budget):
-        r = box_cg(op.normal, b, lo, hi, con, x0, tol=tol_, max_iter=budget,
-                   restore="scale", Ax0=Ax0, **fast)
+        r = box_cg(op.normal, b, lo, hi, con, Start(x0, Ax0),
+                   BoxOptions(tol_, budget, "scale", precondition=fast["precondition"]))
         return Outcome(r.x, r.Ax, r.iterations, r.residual, r.converged, r.multiplier)
 
     def pg(x0, Ax0, tol_, budget):
@@ -285,7 +286,7 @@ def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0, precondition=Non
         p = np.where(lowest, W / (cell_area * np.count_nonzero(lowest)), 0.0)
         return NormalResult(p, float(gap0.min()), np.zeros_like(gap0), 0, 0.0, True)
     res = box_cg(op.normal, gap0, np.zeros_like(gap0), np.full_like(gap0, np.inf),
-                 W / cell_area, p0, tol=tol, max_iter=max_iter, restore="scale", Ax0=Ap0,
-                 precondition=precondition)
+                 W / cell_area, Start(p0, Ap0),
+                 BoxOptions(tol, max_iter, "scale", precondition=precondition))
     return NormalResult(res.x, res.multiplier, res.Ax, res.iterations, res.residual,
                         res.converged)

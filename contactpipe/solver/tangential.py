@@ -40,11 +40,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import (ComponentSums, Constraints, Outcome, box_cg,
+from .cg import (BoxOptions, ComponentSums, Constraints, Outcome, Start, box_cg,
                  cg_with_fallback as _cg_with_fallback,
                  disk_project, fista, project_box_sum, project_rows)
 from .blocks import DirectOperator
-from .disk_cg import disk_cg, disk_start
+from .disk_cg import DiskOptions, disk_cg, disk_start
+from .ledger import Ledger
 from .options import TUNING
 
 __all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "disk_project",
@@ -150,8 +151,8 @@ def solve_scalar(op, b1, bound, T1, cell_area, q0, tol, max_iter, Aq0=None,
     target = con if con is not None else T1 / cell_area
 
     def cg(x0, Ax0, tol_, budget):
-        r = box_cg(op.tangential_scalar, b1, -bound, bound, target, x0, tol=tol_,
-                   max_iter=budget, restore="shift", scale=scale, Ax0=Ax0, precondition=M)
+        r = box_cg(op.tangential_scalar, b1, -bound, bound, target, Start(x0, Ax0),
+                   BoxOptions(tol_, budget, "shift", scale, M))
         return Outcome(r.x, r.Ax, r.iterations, r.residual, r.converged)
 
     def pg(x0, Ax0, tol_, budget):
@@ -205,9 +206,11 @@ def _vector_cg(op, b, bound, con, q0, tol, max_iter, Aq0=None, exact=True, tunin
     A = blocks() if blocks is not None else DirectOperator(op.tangential_vector)
     q = disk_start(q0, rho, con, tol, tuning.snap)
     Aq = A(q) if (Aq0 is None or not np.array_equal(q, q0)) else Aq0
-    res = disk_cg(A, b, q, Aq, rho, con, tol, max_iter, M, op.self_influence("11"),
-                  scale=max(float(rho.sum()), float(np.abs(con.target).max(initial=0.0)),
-                            1e-300), exact=exact, tuning=tuning)
+    scale = max(float(rho.sum()), float(np.abs(con.target).max(initial=0.0)), 1e-300)
+    res = disk_cg(A, b, Start(q, Aq), rho, con,
+                  DiskOptions(tol, max_iter, M, op.self_influence("11"), scale=scale,
+                              tuning=tuning),
+                  Ledger(update=True, defer=tuning.defer, exact=exact))
     return Outcome(res.x, res.Ax, res.iterations, res.residual, res.converged)
 
 
