@@ -80,6 +80,7 @@ def test_no_test_patches_a_solver_constant():
 
 
 MAX_CG_PARAMETERS = 8
+MAX_SOLVER_FUNCTION_LINES = 80
 
 
 def test_cg_interfaces_stay_narrow():
@@ -94,3 +95,16 @@ def test_cg_interfaces_stay_narrow():
     counts = {f.__name__: len(inspect.signature(f).parameters) for f in (box_cg, disk_cg)}
     assert max(counts.values()) <= MAX_CG_PARAMETERS, counts
 
+
+
+def test_solver_functions_stay_short():
+    """No function or method of contactpipe/solver/ over 80 lines (the core is read more
+    than it is written)."""
+    over = {}
+    for p in sorted((ROOT / "contactpipe" / "solver").glob("*.py")):
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > MAX_SOLVER_FUNCTION_LINES:
+                    over[f"{p.name}:{node.name}"] = n
+    assert not over, f"solver functions over {MAX_SOLVER_FUNCTION_LINES} lines: {over}"

@@ -51,7 +51,8 @@ from .cg import Constraints
 from .joint import finish, finish_vector, solve_joint, solve_joint_vector
 from .normal import NormalControl, NormalResult, solve_normal
 from .options import TUNING, Tuning
-from .tangential import follow_bound, force_rows, solve_scalar, solve_vector
+from .tangential import (TangentialResult, follow_bound, force_rows, solve_scalar,
+                         solve_vector)
 
 __all__ = ["Controls", "FREEDOMS", "InstantResult", "Previous", "Tolerances",
            "follow_bound", "solve_instant"]
@@ -417,6 +418,71 @@ def _pressure_change(p_new, p, W, cell_area) -> float:
     return moved / size
 
 
+@dataclass
+class _PassState:
+    """Where the tangential solve and the coupling passes left an instant."""
+
+    n: NormalResult             # the last normal solution
+    p: np.ndarray               # its pressure [Pa]
+    q: np.ndarray               # the last shear [Pa]
+    t_res: TangentialResult     # the last tangential solution
+    up: np.ndarray | None       # (u1, u2) from p of a coupled pair [m]
+    domega: np.ndarray          # (Δω1, Δω2) [m]
+    dphi3: float                # Δφ3 [rad]
+
+    def fields(self):
+        return self.n, self.p, self.q, self.t_res, self.up, self.domega, self.dphi3
+
+
+def _passes(s: _Instant, n, q):
+    """The tangential solve from the normal solution ``n`` and, for a coupled pair, the
+    block Gauss-Seidel passes (module notes): a :class:`_PassState`, or the failed
+    :class:`InstantResult` of the solve that stopped or of passes that did not settle."""
+    ctl, limits, cell_area, U = s.ctl, s.lim, s.cell, s.U
+    tol, tuning, p = limits.tol, limits.tuning, n.p
+    # the pass before the last one allowed runs at the full tolerance, so that the
+    # last can settle the step (a pass settles only after one at the full tolerance)
+    inner = max(tol, tuning.passes_first_tolerance) if s.coupled and limits.max_passes > 2 \
+        else tol
+    t_res, up = s.tangential(p, q, inner, final=not s.coupled)
+    s.its += t_res.iterations
+    if not t_res.converged:
+        return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
+    q = t_res.q
+    domega, dphi3 = s.motions(t_res)
+    while s.coupled:
+        # the next pass's normal solve measures the change the last pass left
+        n = s.normal(q, p, inner, Ap0=n.Ap)
+        s.its += n.iterations
+        if not n.converged:
+            return s.failure("normal", n, n.p, q, domega)
+        W = s.W if ctl.is_force(0) else float(n.p.sum()) * cell_area
+        if ctl.is_force(1) and not ctl.is_force(0) and s.slides(n, q, W) is not None:
+            return s.slides(n, q, W)        # the approach's W fell below |T| / μ
+        change = _pressure_change(n.p, p, W, cell_area)
+        last = inner == tol
+        if s.passes >= limits.max_passes and not (change < tol and last):
+            # (a pass that only confirms a settled pressure is not refused)
+            return InstantResult(n.p, q, U, n.omega3, domega, s.its, s.passes, False,
+                                 change, "coupling", n)
+        s.passes += 1
+        p = n.p
+        inner = min(inner, max(tol, tuning.passes_tolerance_fraction * change))
+        if s.passes >= limits.max_passes - 1:
+            inner = tol
+        # an open contact (p = 0: an approach that lifts it) leaves q = 0 exactly
+        final = (change < tol and last) or not p.any()
+        t_res, up = s.tangential(p, q, inner, Aq0=t_res.Aq, final=final)
+        s.its += t_res.iterations
+        if not t_res.converged:
+            return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
+        q = t_res.q
+        domega, dphi3 = s.motions(t_res)
+        if final:
+            break
+    return _PassState(n, p, q, t_res, up, domega, dphi3)
+
+
 def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
                   limits: Tolerances, controls: Controls | None = None) -> InstantResult:
     """Solve one instant of the coupled contact.
@@ -462,14 +528,13 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
     """
     ctl = controls if controls is not None else Controls.forces(W, T)
     s = _Instant(op, gap, U, ctl, cell_area, mu, plan, previous, limits)
-    tol, tuning = limits.tol, limits.tuning
+    tol = limits.tol
     if s.joint_applies():
         res = s.joint(tol)
         if res is not None:
             return res
     q = previous.q.copy() if s.tang != "none" else np.zeros_like(previous.q)
-    worst, change = 0.0, np.inf
-
+    worst = 0.0
     # -- normal -------------------------------------------------------------------------
     n = previous.normal if previous.normal is not None else s.normal(q, previous.p_guess, tol)
     if previous.normal is None:
@@ -485,51 +550,14 @@ def solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         slides = s.slides(n, q, W)
         if slides is not None:
             return slides
-
     # -- tangential, and the coupling loop ------------------------------------------------
     if s.tang != "none" and op.rigid:
         q = s.rigid_shear(p, W, q)
     elif s.tang != "none":
-        # the pass before the last one allowed runs at the full tolerance, so that the
-        # last can settle the step (a pass settles only after one at the full tolerance)
-        inner = max(tol, tuning.passes_first_tolerance) if s.coupled and limits.max_passes > 2 \
-            else tol
-        t_res, up = s.tangential(p, q, inner, final=not s.coupled)
-        s.its += t_res.iterations
-        if not t_res.converged:
-            return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
-        q = t_res.q
-        domega, dphi3 = s.motions(t_res)
-        while s.coupled:
-            # the next pass's normal solve measures the change the last pass left
-            n = s.normal(q, p, inner, Ap0=n.Ap)
-            s.its += n.iterations
-            if not n.converged:
-                return s.failure("normal", n, n.p, q, domega)
-            W = s.W if ctl.is_force(0) else float(n.p.sum()) * cell_area
-            if ctl.is_force(1) and not ctl.is_force(0) and s.slides(n, q, W) is not None:
-                return s.slides(n, q, W)        # the approach's W fell below |T| / μ
-            change = _pressure_change(n.p, p, W, cell_area)
-            last = inner == tol
-            if s.passes >= limits.max_passes and not (change < tol and last):
-                # (a pass that only confirms a settled pressure is not refused)
-                return InstantResult(n.p, q, U, n.omega3, domega, s.its, s.passes, False,
-                                     change, "coupling", n)
-            s.passes += 1
-            p = n.p
-            inner = min(inner, max(tol, tuning.passes_tolerance_fraction * change))
-            if s.passes >= limits.max_passes - 1:
-                inner = tol
-            # an open contact (p = 0: an approach that lifts it) leaves q = 0 exactly
-            final = (change < tol and last) or not p.any()
-            t_res, up = s.tangential(p, q, inner, Aq0=t_res.Aq, final=final)
-            s.its += t_res.iterations
-            if not t_res.converged:
-                return s.failure("tangential", t_res, p, t_res.q, t_res.domega)
-            q = t_res.q
-            domega, dphi3 = s.motions(t_res)
-            if final:
-                break
+        out = _passes(s, n, q)
+        if isinstance(out, InstantResult):
+            return out
+        n, p, q, t_res, up, domega, dphi3 = out.fields()
         worst = max(worst, t_res.residual)
 
     u = s.displacement(n, q, t_res, up)

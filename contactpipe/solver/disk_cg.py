@@ -424,13 +424,9 @@ def disk_cg(A, b, start, rho, con, options: DiskOptions, ledger: Ledger | None =
     options : DiskOptions
         Tolerance, iterations, the filter, the scale, the tuning.
     ledger : Ledger, optional
-        A x's bookkeeping (:class:`~.ledger.Ledger`; default: updated, corrections
-        deferred by ``options.tuning.defer``, exact). Its ``follow(x) -> Move``: where
-        the solve converges, the point the caller moves to next (the next coupling pass's
-        start, the instant's final state), whose A x′ comes from the last step's inverse
-        transforms (x′ − x costs its forward transforms only). With ``exact`` a
-        converged result's A x takes in every correction left out (folded into the last
-        step); without it, where some are left, A x is None.
+        A x's bookkeeping (default: corrections deferred by ``options.tuning.defer``,
+        exact). Its ``follow(x) -> Move`` gives, where the solve converges, the point the
+        caller moves to next, whose A x′ rides on the last step's inverse transforms.
     pressure : PressureBlock, optional
         x[0] is the pressure.
 

@@ -161,21 +161,7 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         plan.last_allowed(passes, max_passes)
         lag = p                                   # the bound of s: |s| <= p (lagged)
         lo, hi = np.stack([zero, -lag]), np.stack([inf, lag])
-
-        def follow(x, lag=lag):
-            """The converged pass's (p, s) -> the next pass's start (the slip cells on
-            their moved bound, the rows restored as box_cg would: "next"), or after the
-            last pass ("settled") the instant's final state (the shear on its own
-            pressure's bound, as :func:`finish` puts it; None where it is there)."""
-            p_new = x[0]
-            s_new = follow_bound(x[1], lag, p_new)
-            if plan.settled(p_new, lag, W, cell_area):
-                np.clip(s_new, -p_new, p_new, out=s_new)
-                return Move(None if np.array_equal(s_new, x[1]) else np.stack([p_new, s_new]),
-                            "settled")
-            return Move(feasible_start(np.stack([p_new, s_new]), np.stack([zero, -p_new]),
-                                       np.stack([inf, p_new]), rows, "shift"), "next")
-
+        follow = _scalar_follow(plan, lag, W, cell_area, rows)
         res = box_cg(apply, b, lo, hi, rows, Start(x, Ax, x),
                      BoxOptions(plan.inner, max_iter, "shift", precondition=precondition),
                      Ledger(update=True, defer=tuning.defer, follow=follow, exact=True))
@@ -192,6 +178,51 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
                                plan.change)
     return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, max_passes, False,
                        plan.change)
+
+
+def _scalar_follow(plan, lag, W, cell_area, rows):
+    """The scalar pass's ``follow`` (bound |s| <= ``lag``, W [N] over cells Δ [m²]): the
+    converged (p, s) -> the next pass's start (the slip cells on their moved bound, the
+    rows restored as box_cg would: "next"), or after the last pass ("settled") the
+    instant's final state (the shear on its own pressure's bound, as :func:`finish` puts
+    it; no point where it is there)."""
+    def follow(x):
+        p_new = x[0]
+        s_new = follow_bound(x[1], lag, p_new)
+        if plan.settled(p_new, lag, W, cell_area):
+            np.clip(s_new, -p_new, p_new, out=s_new)
+            return Move(None if np.array_equal(s_new, x[1]) else np.stack([p_new, s_new]),
+                        "settled")
+        zero, inf = np.zeros_like(p_new), np.full_like(p_new, np.inf)
+        return Move(feasible_start(np.stack([p_new, s_new]), np.stack([zero, -p_new]),
+                                   np.stack([inf, p_new]), rows, "shift"), "next")
+    return follow
+
+
+def _vector_follow(plan, lag, load, con, snap):
+    """The vector pass's ``follow`` (bound |s| <= ``lag``; ``load`` = (W [N], Δ [m²])): the
+    converged (p, s) -> the next pass's start, its slip cells on their moved bound
+    ("next"), or the instant's final state ("settled", :func:`_final_shear`); where no
+    cell sticks, no move ("sliding")."""
+    def follow(xc):
+        p_new, s_new = xc[0], xc[1:]
+        settled = plan.settled(p_new, lag, *load)
+        if sliding(s_new, lag):
+            return Move(xc, "sliding")
+        if settled:
+            s_next = _final_shear(s_new, lag, p_new, con)
+        else:
+            s_next = disk_start(follow_bound(s_new, lag, p_new), p_new, con, plan.inner, snap)
+        return Move(np.concatenate([p_new[None], s_next]), "settled" if settled else "next")
+    return follow
+
+
+def _vector_operator(op, mu):
+    """The vector joint solve's operator over (p, s1, s2), s = q/μ, in halves."""
+    k = op.k
+    return BlockOperator(op.conv, [[k["33"], mu * k["31"], mu * k["32"]],
+                                   [mu * k["13"], mu * mu * k["11"], mu * mu * k["12"]],
+                                   [mu * k["23"], mu * mu * k["21"], mu * mu * k["22"]]])
 
 
 def _operator(conv, blocks, tuning):
@@ -246,10 +277,8 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
         subject to  p ≥ 0,  |s| ≤ p_lag per cell,  Σp = W/Δ,  Σs = T/(μΔ),
 
     by the projected CG of :func:`contactpipe.solver.disk_cg.disk_cg` with its pressure
-    block: one operator application is three FFT pairs (three forward transforms, nine
-    kernel products, three inverse), the filters three quarters of one (one where the
-    tangents' component is filtered in two bands:
-    :func:`~contactpipe.solver.disk_cg.direction`). The passes, their
+    block: one operator application is three FFT pairs, the filters three quarters of one
+    (one where the tangents' component is filtered in two bands). The passes, their
     inexact schedule and their end are :func:`solve_joint`'s (:class:`_Schedule`). Where
     a pass converges its iterate moves on (the CG's ``follow``): to the next pass's start,
     the slip cells on their moved bound, or, after the last pass, to the final state, the
@@ -263,10 +292,8 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
         Operator of the instant; not rigid.
     b : ndarray (3, N1, N2)
         hi + U3, and U1 − u1(k−1), U2 − u2(k−1) [m].
-    W : float
-        Normal force [N], > 0.
-    T : array_like (2,)
-        Tangential force [N], |T| ≤ μW.
+    W, T : float, array_like (2,)
+        Normal force [N], > 0; tangential force [N], |T| ≤ μW.
     cell_area, mu :
         [m²], uniform friction coefficient [1].
     p0, q0 : ndarray
@@ -282,10 +309,7 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
         ``q`` (2, N1, N2) on the final bound ``bound`` = μ p, ``Ax`` (u3, u1, u2) [m] of
         (p, q); ``converged`` False when a pass stopped or the passes did not settle.
     """
-    k, conv = op.k, op.conv
-    A = BlockOperator(conv, [[k["33"], mu * k["31"], mu * k["32"]],     # disk_cg: halves
-                             [mu * k["13"], mu * mu * k["11"], mu * mu * k["12"]],
-                             [mu * k["23"], mu * mu * k["21"], mu * mu * k["22"]]])
+    A = _vector_operator(op, mu)
     M = op.tangential_preconditioner()
     pressure = PressureBlock(W / cell_area, op.corner("11") / op.corner("33"))
     con = force_rows(p0.shape, np.asarray(T, dtype=float) / mu, cell_area)
@@ -300,23 +324,7 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
     for passes in range(1, max_passes + 1):
         plan.last_allowed(passes, max_passes)
         lag = x[0]                                # the bound of s: |s| <= p (lagged)
-
-        def follow(xc, lag=lag):
-            """The converged pass's (p, s) -> the next pass's start, its slip cells on
-            their moved bound ("next"), or the instant's final state ("settled",
-            :func:`_final_shear`); where no cell sticks, no move ("sliding")."""
-            p_new, s_new = xc[0], xc[1:]
-            settled = plan.settled(p_new, lag, W, cell_area)
-            if sliding(s_new, lag):
-                return Move(xc, "sliding")
-            if settled:
-                s_next = _final_shear(s_new, lag, p_new, con)
-            else:
-                s_next = disk_start(follow_bound(s_new, lag, p_new), p_new, con, plan.inner,
-                                    tuning.snap)
-            return Move(np.concatenate([p_new[None], s_next]),
-                        "settled" if settled else "next")
-
+        follow = _vector_follow(plan, lag, (W, cell_area), con, tuning.snap)
         res = disk_cg(A, b, Start(x, Ax), lag, con,
                       DiskOptions(plan.inner, max_iter, M, a_self, unit=mu, tuning=tuning),
                       Ledger(update=True, defer=tuning.defer, follow=follow), pressure)
