@@ -557,3 +557,48 @@ def test_displacement_control_slides_as_a_whole(elastic):
     assert sca.converged
     g = sca.Aq[0] + b[0]
     np.testing.assert_array_equal(sca.q[0][rho > 0], rho[rho > 0] * np.sign(-g[rho > 0]))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_disk_cg_equals_the_exact_active_set_solution(seed):
+    """disk_cg through its narrow interface (operator, start, bounds, rows, options,
+    ledger) on a problem whose disks act as boxes: A = diag(K11, I) on a 2 x 4 grid,
+    b2 = 0 and T2 = 0, so q2 = 0 and |q1| ≤ ρ is the scalar problem, solved exactly by
+    enumerating the active sets (1-5 of the 8 cells on their bound). With the default
+    ledger: q1 within 1e-12 of it and q2 = 0 to 1e-12 (measured 1.3e-15 and 0 in 7-11
+    iterations), and the result's Ax is A times its own x to 1e-12; so it is with every
+    correction deferred (defer = 1e300: a search blind to its projections, whose point
+    is not compared) and folded in at the end (``exact``); where ``follow`` moves the
+    solve on, x is the move's point, ``iterate`` the solution, ``move`` the decision, and
+    Ax the point's product."""
+    from contactpipe.solver.blocks import DirectOperator
+    from contactpipe.solver.cg import Start
+    from contactpipe.solver.disk_cg import DiskOptions, disk_cg, disk_start
+    from contactpipe.solver.ledger import Ledger, Move
+    rng = np.random.default_rng(40 + seed)
+    K11 = spd_matrix(rng, 8)
+    dense = np.block([[K11, np.zeros((8, 8))], [np.zeros((8, 8)), np.eye(8)]])
+    A = DirectOperator(lambda x: (dense @ x.ravel()).reshape(x.shape))
+    rho = rng.uniform(0.2, 1.0, (2, 4))
+    b = np.stack([rng.standard_normal((2, 4)), np.zeros((2, 4))])
+    area = 0.5
+    T1 = float(rng.uniform(-0.8, 0.8) * rho.sum() * area)
+    con = force_rows((2, 4), [T1, 0.0], area)
+    q = disk_start(np.zeros((2, 2, 4)), rho, con, 1e-13)
+    x_ex, _ = box_qp_exact(K11, b[0].ravel(), -rho.ravel(), rho.ravel(), T1 / area)
+    opt = DiskOptions(1e-13, 2000, a_self=float(np.diag(K11).mean()), scale=float(rho.sum()))
+    res = disk_cg(A, b, Start(q, A(q)), rho, con, opt)
+    assert res.converged and res.move is None
+    np.testing.assert_allclose(res.x[0].ravel(), x_ex, rtol=0, atol=1e-12)
+    assert np.abs(res.x[1]).max() <= 1e-12
+    np.testing.assert_allclose(res.Ax, A(res.x), rtol=0, atol=1e-12 * np.abs(res.Ax).max())
+    blind = disk_cg(A, b, Start(q, A(q)), rho, con, opt, Ledger(update=True, defer=1e300))
+    np.testing.assert_allclose(blind.Ax, A(blind.x), rtol=0,
+                               atol=1e-12 * np.abs(blind.Ax).max())
+    shifted = 0.5 * res.x                              # a point the caller moves on to
+    moved = disk_cg(A, b, Start(q, A(q)), rho, con, opt,
+                    Ledger(update=True, defer=0.1, follow=lambda x: Move(shifted, "next")))
+    assert moved.converged and moved.move.verdict == "next" and moved.x is shifted
+    np.testing.assert_allclose(moved.iterate[0].ravel(), x_ex, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(moved.Ax, A(shifted), rtol=0,
+                               atol=1e-12 * np.abs(moved.Ax).max())

@@ -11,6 +11,17 @@ s = q/μ — and the problem
 A symmetric positive definite (DC-FFT block convolutions), C the shear's rows
 (:class:`~contactpipe.solver.cg.Constraints`: forces, torque, or none).
 
+Its optimality conditions are the contact laws: with the residual r = A x + b less the
+rows' multipliers (Cᵀλ on the shear, ω3 on the pressure),
+
+    r_i = 0 where |s_i| < ρ_i (stick),   r_i = −κ_i s_i, κ_i ≥ 0, where |s_i| = ρ_i (slip),
+    r_p = 0 where p > 0,   r_p ≥ 0 where p = 0,
+
+i.e. no slip increment in stick, a slip increment (−r) along the shear on the rim, and
+the normal contact laws of :mod:`contactpipe.solver.cg`. Tests: the exact active-set
+solution where the disks act as boxes, the conditions and scipy's SLSQP
+(tests/test_tangential_solvers.py).
+
 The iteration, over all contact cells at once:
 
 * stick cells (|s| < ρ), and slip cells whose residual points into the disk (they
