@@ -423,9 +423,9 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
         sub = pb.sub_plan(first)
         previous = Previous(st.q, st.u, st.p, st.normal if same_normal else None, st.motion)
         if f_last > 0.0 and pb.similar is not None:     # a preload sub-step: its start
-            previous = self_similar_start(previous, f / f_last, pb.similar)
+            previous = self_similar_start(previous, f / f_last, pb.similar, pb.limits.tuning)
         elif pb.tang:                                   # a straight load path: its start
-            previous = continued_start(previous, st.dq, c, st.dp)
+            previous = continued_start(previous, st.dq, c, st.dp, pb.limits.tuning)
         f_last = f
         res = (solve_in_window if windowed else solve_instant)(
             op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,

@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe import simulation
 from contactpipe.solver import coupling, joint
 from contactpipe.solver.cg import BlockSums, BoxOptions, box_cg
 from contactpipe.solver.coupling import Previous, follow_bound
@@ -214,15 +213,14 @@ def test_preconditioned_tangential_gives_the_plain_answer():
     assert_same(fast, slow, 1e-7, 1e-7)
 
 
-def test_self_similar_start_of_the_preload(monkeypatch):
+def test_self_similar_start_of_the_preload():
     """Rigid sphere on Maxwell, 32², 20 steps: the preload's sub-steps started from the
     stretched fields give the fields of the unstretched start within 1e-7 of p0 and μp0
     (measured 1.0e-11 / 1.2e-10),
     and a Hertz pressure stretched from W/4 to W (64² over 4a) is within 3 % of Hertz at W
     in Σ|Δp| / Σp (measured 2.1 %; the unstretched one, scaled to W, is off by 97 %)."""
     fast = cp.simulate(rigid_on_maxwell())
-    monkeypatch.setattr(simulation, "self_similar_start", lambda prev, r, e: prev)
-    slow = cp.simulate(rigid_on_maxwell())
+    slow = cp.simulate(rigid_on_maxwell(), tuning=replace(TUNING, self_similar_starts=False))
     assert_same(fast, slow, 1e-7, 1e-7)
 
     from contactpipe.solver.warm_start import self_similar_start
@@ -243,7 +241,7 @@ def test_self_similar_start_of_the_preload(monkeypatch):
 
 
 @pytest.mark.parametrize("form", ["scalar", "vector"])
-def test_tractions_continued_along_a_straight_load_path(monkeypatch, form):
+def test_tractions_continued_along_a_straight_load_path(form):
     """Steel on aluminium fretting, 32², 20 steps: starting each instant of a straight
     stretch from q(k−1) + c (q(k−1) − q(k−2)), and its joint solve from the pressure
     continued alike, gives the instants of the plain start within 1e-7 of p0 and μp0
@@ -251,8 +249,8 @@ def test_tractions_continued_along_a_straight_load_path(monkeypatch, form):
     after the first instant (measured 1 157 against 1 182 scalar, 1 984 against 2 145
     vector; at 128² and 40 steps 61.6 against 67.2 and 130.5 against 142.7 a step)."""
     fast = cp.simulate(steel_on_aluminium(), tangential=form)
-    monkeypatch.setattr(simulation, "continued_start", lambda prev, dq, c, dp=None: prev)
-    slow = cp.simulate(steel_on_aluminium(), tangential=form)
+    slow = cp.simulate(steel_on_aluminium(), tangential=form,
+                       tuning=replace(TUNING, continued_starts=False))
     assert_same(fast, slow, 1e-7, 1e-7)
     print(fast.fft_pairs.values[1:].sum(), slow.fft_pairs.values[1:].sum())
     assert fast.fft_pairs.values[1:].sum() < slow.fft_pairs.values[1:].sum()

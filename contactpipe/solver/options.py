@@ -38,6 +38,13 @@ class Tuning:
         A vector Gauss-Seidel pass that is not the instant's last may leave its last
         circle corrections out of its product (which the next pass does not use); False:
         every pass's product exact.
+    self_similar_starts : bool
+        A preload sub-step starts from the last one's fields stretched to its load
+        (:func:`~contactpipe.solver.warm_start.self_similar_start`); False: as they were.
+    continued_starts : bool
+        An instant on a straight load path starts from the last one's shear (and the joint
+        solve's pressure) moved on along their increments
+        (:func:`~contactpipe.solver.warm_start.continued_start`); False: as they were.
     precondition : bool
         The tangential CGs filter their direction by the operator's model symbol; False:
         plain (scalar) or diagonally scaled (vector) CG.
@@ -83,6 +90,8 @@ class Tuning:
     defer: float = 0.1
     follow_bound: bool = True
     lagged_passes: bool = True
+    self_similar_starts: bool = True
+    continued_starts: bool = True
     precondition: bool = True
     curvature_shift: float = 0.3
     shift_along_tangents: bool = True

@@ -29,6 +29,8 @@ from dataclasses import replace
 import numpy as np
 from scipy import ndimage
 
+from .options import TUNING
+
 __all__ = ["continued_start", "self_similar_start"]
 
 
@@ -42,7 +44,7 @@ def _stretch(f, lam, centre):
                                    order=1, mode="constant", cval=0.0)
 
 
-def continued_start(previous, dq, c, dp=None):
+def continued_start(previous, dq, c, dp=None, tuning=TUNING):
     """The warm start of an instant that goes on along a straight load path.
 
     Parameters
@@ -56,6 +58,8 @@ def continued_start(previous, dq, c, dp=None):
         path turns [1].
     dp : ndarray (N1, N2), optional
         The last instant's pressure increment p(k−1) − p(k−2) [Pa].
+    tuning : Tuning
+        ``continued_starts`` False: ``previous`` unchanged.
 
     Returns
     -------
@@ -67,6 +71,8 @@ def continued_start(previous, dq, c, dp=None):
         back onto it, and rescale the pressure to its force.
     """
     moves = {}
+    if not tuning.continued_starts:
+        return previous
     if c > 0.0 and np.any(dq):
         moves["q"] = previous.q + c * dq
     if c > 0.0 and dp is not None and np.any(dp):
@@ -74,7 +80,7 @@ def continued_start(previous, dq, c, dp=None):
     return replace(previous, **moves) if moves else previous
 
 
-def self_similar_start(previous, ratio, exponent):
+def self_similar_start(previous, ratio, exponent, tuning=TUNING):
     """The warm start of a sub-step whose load is ``ratio`` times the last one's.
 
     Parameters
@@ -85,6 +91,8 @@ def self_similar_start(previous, ratio, exponent):
         W / W_from > 0 [1].
     exponent : float
         1/(d + 1) for a gap homogeneous of degree d about its apex (1/3 for a sphere).
+    tuning : Tuning
+        ``self_similar_starts`` False: ``previous`` unchanged.
 
     Returns
     -------
@@ -94,7 +102,7 @@ def self_similar_start(previous, ratio, exponent):
     """
     p = previous.p_guess
     total = float(p.sum())
-    if total <= 0.0 or ratio <= 0.0 or ratio == 1.0:
+    if total <= 0.0 or ratio <= 0.0 or ratio == 1.0 or not tuning.self_similar_starts:
         return previous
     i = np.arange(p.shape[0], dtype=float)
     j = np.arange(p.shape[1], dtype=float)
