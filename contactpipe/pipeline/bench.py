@@ -32,6 +32,11 @@ paper-fig3  rigid sphere on a Maxwell half-space (ν = 0.3, coupling on), 128²,
             (``--vector`` adds the vector tangential form)
 long-run    256², 2000 steps streamed to disk: peak resident memory
 
+``--tuning NAME=VALUE ...`` runs ``fretting`` and ``paper-fig3`` with solver switches
+or constants changed from their defaults (:class:`contactpipe.solver.options.Tuning`,
+e.g. ``joint=false`` or ``defer=0``): the FFT pairs are deterministic, so the pair
+columns of two runs show what a feature saves.
+
 The table
 ---------
 ``normal``, ``fretting`` and ``paper-fig3`` write their rows to
