@@ -267,19 +267,20 @@ class BlockSums(Constraints):
 
 
 # --------------------------------------------------------------------------- projections
-def _start(x0, lo, hi, target, restore, con, movable, apply, Ax0, Ax0_of=None):
-    """The first iterate (the constraints restored) and its A x.
+def _start(start, lo, hi, target, restore, con, movable, apply):
+    """The first iterate (``start.x`` with the constraints restored) and its A x.
 
-    ``Ax0`` is A of ``Ax0_of`` when that is given, else of ``x0``. Where the iterate
-    differs from it, A x is recomputed; with ``Ax0_of`` given it is updated instead,
-    A x = Ax0 + A (x − Ax0_of), which costs less when ``apply`` skips the blocks of the
-    difference that are zero (the joint solve's pressure, when only slip cells moved).
+    ``start.Ax`` is A of ``start.of`` when that is given, else of ``start.x``. Where the
+    iterate differs from it, A x is recomputed; with ``start.of`` given it is updated
+    instead, A x = Ax + A (x − of), which costs less when ``apply`` skips the blocks of
+    the difference that are zero (the joint solve's pressure, when only slip cells moved).
     """
-    x, changed, factor = _restored(x0, lo, hi, target, restore, con, movable)
+    Ax0 = start.Ax
+    x, changed, factor = _restored(start.x, lo, hi, target, restore, con, movable)
     if Ax0 is None:
         return x, apply(x)
-    if Ax0_of is not None:
-        return x, Ax0 + apply(x - Ax0_of)
+    if start.of is not None:
+        return x, Ax0 + apply(x - start.of)
     if changed:
         return x, apply(x)
     return x, (Ax0 if factor == 1.0 else Ax0 * factor)
@@ -511,8 +512,7 @@ class _BoxSolve:
             apply, b, lo, hi, target, opt
         self.con = con = target if isinstance(target, Constraints) else None
         self.bounds = _Bounds(lo, hi)
-        x, Ax = _start(start.x, lo, hi, target, opt.restore, con, self.bounds.movable,
-                       apply, start.Ax, start.of)
+        x, Ax = _start(start, lo, hi, target, opt.restore, con, self.bounds.movable, apply)
         if Ax is start.Ax:
             Ax = np.array(Ax, dtype=float)            # updated in place below
         self.x, self.Ax = x, Ax
