@@ -77,7 +77,8 @@ def _tangential_cycles(scene) -> float:
     T = np.hypot(np.asarray(T1, float), np.asarray(T2, float))
     if T.max() == 0:
         return 0.0
-    path = np.abs(np.diff(np.asarray(T1, float))).sum() + np.abs(np.diff(np.asarray(T2, float))).sum()
+    path = (np.abs(np.diff(np.asarray(T1, float))).sum()
+            + np.abs(np.diff(np.asarray(T2, float))).sum())
     return float(path / (4.0 * T.max()))
 
 
@@ -97,7 +98,7 @@ def _characteristic_times(scene):
             if not np.isfinite(scale):      # extreme constants: keep every term
                 scale = 0.0
             found = ([1.0 / creep.b] if creep.b > 0 else []) + [
-                float(tau) for d, tau in zip(creep.d, creep.tau)
+                float(tau) for d, tau in zip(creep.d, creep.tau, strict=True)
                 if abs(d) >= TERM_FRACTION * scale]
             out.extend((t, body) for t in found if 0.0 < t < np.inf)
     return out
@@ -160,7 +161,7 @@ def resolve_accuracy(scene):
                          f"contact gives semi-axes {tuple(a_max)} m on sides {tuple(side)} "
                          f"m, not finite and > 0; give grid.points and time.steps instead")
     points = []
-    for L, a in zip(side, a_max):
+    for L, a in zip(side, a_max, strict=True):
         cells = pre.cells_across_contact * (L / a) / 2.0          # inf when a << L
         n = MAX_POINTS if cells >= MAX_POINTS else int(math.ceil(cells))
         n += n % 2

@@ -27,7 +27,8 @@ fully reversed fatigue limits)
     over plane normals n, with the normal strain eps_n = ((1 + nu) sigma_n - nu tr
     sigma)/E of the elastic stress; planes where sigma_n,max <= 0 count 0. Normals on a
     ``plane_step`` degree grid of the hemisphere (default 10, at least 1: finer grids do
-    not fit in memory), then refined twice around the best one (steps / 4, / 16). Also the normal of the critical plane.
+    not fit in memory), then refined twice around the best one (steps / 4, / 16). Also the
+    normal of the critical plane.
 
 Shear amplitude sqrt(J2,a) and the centre s* (Crossland, Dang Van, amplitude): by default
 the **minimum circumscribed ball** (MCB) of the deviatoric path, in the 5-D space where the
@@ -224,8 +225,8 @@ def min_ball(points, tolerance=1e-9, max_iter=100000):
     weight towards the furthest point or away from the nearest supporting one, with the
     exact line search; O(k d) work per set and step (the products p_i . c are updated
     with one column of the Gram matrix, and recomputed at each polish against drift;
-    points are shifted to their mean first). After 8 steps, then every 16, the support is read off the
-    weights and the exact ball through it is found by pivoting (:func:`_polish`),
+    points are shifted to their mean first). After 8 steps, then every 16, the support is read
+    off the weights and the exact ball through it is found by pivoting (:func:`_polish`),
     accepted only where it satisfies the optimality conditions: most sets finish there.
     """
     P = np.asarray(points, dtype=float)
@@ -351,7 +352,7 @@ def plane_normals(step_deg):
             if i == nt and phi >= 180.0 - 1e-9:
                 continue
             out.append((theta, phi))
-    th, ph = (np.array(v) for v in zip(*out))
+    th, ph = (np.array(v) for v in zip(*out, strict=True))
     return _normal(th, ph), th, ph
 
 
@@ -584,7 +585,7 @@ def fatigue(stress_ds: xr.Dataset, criterion: str = "crossland", **constants) ->
     nz = stress_ds.sizes["x3"]
     chunks = stress_ds["s11"].chunks
     bounds = np.cumsum((0,) + tuple(chunks[1])) if chunks is not None else np.arange(nz + 1)
-    for z0, z1 in zip(bounds[:-1], bounds[1:]):
+    for z0, z1 in zip(bounds[:-1], bounds[1:], strict=True):
         # one read (or one dask computation) of the six components per group of depths
         group = stress_ds[list(COMPONENTS)].isel(x3=slice(int(z0), int(z1))).compute()
         for k in range(int(z0), int(z1)):

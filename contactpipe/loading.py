@@ -127,7 +127,7 @@ class Programs:
             return 0.0
         return c
 
-    def on(self, tm) -> "Programs":
+    def on(self, tm) -> Programs:
         """The programs interpolated linearly onto the instants ``tm`` [s]."""
         tm = np.atleast_1d(np.asarray(tm, dtype=float))
 

@@ -33,9 +33,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FIELD", "SERIES", "MAP", "MAPS", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS", "REQUIRED_ATTRS",
-           "CONVENTIONS", "TANGENTIAL", "STATUS_SEPARATED", "STATUS_STICK", "STATUS_SLIP", "cf_attrs",
-           "variables_for"]
+__all__ = ["FIELD", "SERIES", "MAP", "MAPS", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS",
+           "REQUIRED_ATTRS", "CONVENTIONS", "TANGENTIAL", "STATUS_SEPARATED", "STATUS_STICK",
+           "STATUS_SLIP", "cf_attrs", "variables_for"]
 
 FIELD = ("time", "x1", "x2")
 SERIES = ("time",)

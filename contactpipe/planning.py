@@ -470,7 +470,8 @@ AUTO_PRELOAD_GUESS = 32
 
 def _preload_substeps(setting) -> int:
     """Sub-step solves of a frictional preload: its n, and the coarser paths of its error
-    estimate (n/4 and n/2; 2, 4, ..., n/2 for "auto"; :func:`contactpipe.accuracy.choose_preload`)."""
+    estimate (n/4 and n/2; 2, 4, ..., n/2 for "auto";
+    :func:`contactpipe.accuracy.choose_preload`)."""
     if setting == "auto":
         return 2 * AUTO_PRELOAD_GUESS
     n = int(setting)
@@ -507,7 +508,7 @@ def _step_share(scene, n1, n2) -> float:
     if axes is None or size is None:
         return 1.0
     share = 1.0
-    for a, length, n in zip(axes, size, (n1, n2)):
+    for a, length, n in zip(axes, size, (n1, n2), strict=True):
         cells = 2.0 * float(a) / float(length) * n             # the contact's extent
         c = SIDE_STEP * math.ceil((cells + 2 * max(2.0, MARGIN * cells)) / SIDE_STEP)
         share *= min(n, c) / n
@@ -572,8 +573,8 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     54.5 MiB with them, estimated 53.3 then 65.1 MiB). The estimate
     stays above every measurement, by 6 % to 80 % (the most on small grids, where the fixed
     allowances dominate); it grows as N1 x N2 (for a viscoelastic half-space 1.7 kB per cell
-    measured at 512², 1.9 kB estimated: four sets of nine kernel spectra). The time is a floor, not a forecast:
-    the FFT pairs of the speed table times the least time of one pair.
+    measured at 512², 1.9 kB estimated: four sets of nine kernel spectra). The time is a floor,
+    not a forecast: the FFT pairs of the speed table times the least time of one pair.
     """
     pl = plan_ if plan_ is not None else plan(scene)
     n1, n2 = (int(v) for v in scene.grid.points)

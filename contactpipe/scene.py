@@ -223,7 +223,7 @@ def contact_reach(geometry, indenter, halfspace, load):
         return None
     a = hertz_semi_axes(geometry, indenter, halfspace, load)
     shifts = contact_shifts(geometry, load)
-    return tuple(float(ai + s[0]) for ai, s in zip(a, shifts))
+    return tuple(float(ai + s[0]) for ai, s in zip(a, shifts, strict=True))
 
 
 def auto_grid_size(geometry, indenter, halfspace, load):
@@ -435,12 +435,12 @@ def _check_reach(p, problems):
         auto_grid_size(geo, p["indenter"], p["halfspace"], load)
     if any(math.isnan(r) for r in reach) or not all(math.isfinite(L) for L in size):
         return                  # an estimate out of range: refused by _check_grid for "auto"
-    allowed = [L / 2 - L / n for L, n in zip(size, grid.points)]
+    allowed = [L / 2 - L / n for L, n in zip(size, grid.points, strict=True)]
     over = [ax for ax in (0, 1) if reach[ax] > allowed[ax]]
     if not over:
         return
-    need = [r / (0.5 - 1.0 / n) for r, n in zip(reach, grid.points)]
-    need = [max(n, L) for n, L in zip(need, size)]
+    need = [r / (0.5 - 1.0 / n) for r, n in zip(reach, grid.points, strict=True)]
+    need = [max(n, L) for n, L in zip(need, size, strict=True)]
     ax = over[0]
     name = ("x1", "x2")[ax]
     shifts = contact_shifts(geo, load)
@@ -672,7 +672,7 @@ class Scene:
     # -- construction ------------------------------------------------------------------
 
     @classmethod
-    def from_dict(cls, d, base_dir=None) -> "Scene":
+    def from_dict(cls, d, base_dir=None) -> Scene:
         """A scene from its nested-dict form (as :meth:`to_dict` gives or TOML reads); a
         relative ``geometry.file`` or ``friction.mu`` file is taken relative to
         ``base_dir`` (default: the current directory)."""
@@ -695,13 +695,13 @@ class Scene:
         return cls(**d)
 
     @classmethod
-    def from_toml_text(cls, text: str, base_dir=None) -> "Scene":
+    def from_toml_text(cls, text: str, base_dir=None) -> Scene:
         """A scene from TOML text; a relative ``geometry.file`` is taken relative to
         ``base_dir`` (default: the current directory)."""
         return cls.from_dict(loads_toml(text, "the scene"), base_dir)
 
     @classmethod
-    def from_toml(cls, path) -> "Scene":
+    def from_toml(cls, path) -> Scene:
         """A scene from a TOML file; a relative ``geometry.file`` is taken relative to
         the scene file's folder."""
         path = os.fspath(path)
@@ -761,7 +761,7 @@ class Scene:
             files.append(self.friction.mu)
         return [f for f in files if f]
 
-    def replace(self, changes) -> "Scene":
+    def replace(self, changes) -> Scene:
         """A new, validated scene with some values changed.
 
         Parameters

@@ -168,9 +168,9 @@ def _check_table(table, key) -> list:
         out.append(f"{key} must be {_TABLE_WHAT}, got {len(table)} row")
     if t[0] != 0.0:
         out.append(f"{key} must start at t = 0, got t = {t[0]:g} s in its first row")
-    if any(b <= a for a, b in zip(t, t[1:])):
+    if any(b <= a for a, b in zip(t, t[1:], strict=False)):
         out.append(f"{key} times must be strictly ascending, got t = {show(t)}")
-    if any(b < a for a, b in zip(phi, phi[1:])):
+    if any(b < a for a, b in zip(phi, phi[1:], strict=False)):
         out.append(f"{key} phi must not decrease (a creep function grows with time), "
                    f"got phi = {show(phi)}")
     if phi[0] < 0 or any(p <= 0 for p in phi[1:]):
@@ -764,7 +764,7 @@ class Grid(Part):
 
         The one implementation of the grid's coordinates (docs/conventions.md, Grid)."""
         return tuple(-L / 2 + (np.arange(N) + 0.5) * (L / N)
-                     for N, L in zip(self.points, self._size()))
+                     for N, L in zip(self.points, self._size(), strict=True))
 
 
 @dataclass(frozen=True)

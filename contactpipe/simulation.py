@@ -130,7 +130,7 @@ class _Problem:
             self._operators = {}
             self.op_first = self.operator(self._weights(fresh, True))
             self.hist_kernels = history_kernels(*(s if m is not None else None
-                                                  for s, m in zip(spectra, fresh)))
+                                                  for s, m in zip(spectra, fresh, strict=True)))
             self.op_next = self.operator(self._weights(fresh, False)) \
                 if self.t.size > 1 else self.op_first
             #: the time rule each body's memory applies ("auto" resolved), None without one
@@ -152,7 +152,7 @@ class _Problem:
     def instant_weights(self, mems) -> list:
         """The creep weights of the next instant's traction, one per body [1]."""
         return [self._body_weight(b, m, None if m is None else m.instant_weight)
-                for b, m in zip(self.bodies, mems)]
+                for b, m in zip(self.bodies, mems, strict=True)]
 
     def new_memories(self) -> list:
         """A fresh memory per viscoelastic body (None for the others): one recursion per
@@ -183,7 +183,7 @@ class _Problem:
     def _weights(self, mems, first):
         return [self._body_weight(b, m, None if m is None else
                                   (m.weight0 if first else m.weight))
-                for b, m in zip(self.bodies, mems)]
+                for b, m in zip(self.bodies, mems, strict=True)]
 
     def _check_finite(self, d1, d2):
         """Refuse constants whose influence coefficients float64 cannot hold, or whose
@@ -371,10 +371,10 @@ class _Problem:
         model, and the fit of a creep function from a table."""
         out = {}
         sides = ("indenter", "halfspace")
-        used = [f"{side}: {rule}" for side, rule in zip(sides, self.rules) if rule]
+        used = [f"{side}: {rule}" for side, rule in zip(sides, self.rules, strict=True) if rule]
         if used:
             out["time_rule_resolved"] = ", ".join(used)
-        for side, b in zip(sides, self.bodies):
+        for side, b in zip(sides, self.bodies, strict=True):
             if b.split:
                 out[f"{side}_poisson_model"] = ("elastic bulk: the Poisson ratio varies "
                                                 "from its value where phi = 1")
@@ -545,7 +545,7 @@ def _failure(pb, k, T, res) -> ConvergenceError:
         hint += ("; the computation overflowed float64 (the forces, moduli or lengths of "
                  "the scene are beyond its range)")
     if res.failed == "normal" and pb.program.general:
-        keys = [key for i, key in zip((3, 4), pb.program.keys[3:5])
+        keys = [key for i, key in zip((3, 4), pb.program.keys[3:5], strict=True)
                 if key.startswith("moment")]
         if keys:
             hint += (f"; a force-controlled {' and '.join('load.' + k_ for k_ in keys)} may "

@@ -227,7 +227,7 @@ def _block(arrays, names, depths, op: SubsurfaceOperator, sign_q: float):
     Returns (7, nt, nz, n1, n2) [Pa]: the components of COMPONENTS, then von Mises.
     Depth-outer loop: each depth's spectra serve every instant of the block.
     """
-    fields = dict(zip(names, (np.asarray(a, dtype=float) for a in arrays)))
+    fields = dict(zip(names, (np.asarray(a, dtype=float) for a in arrays), strict=True))
     nt = fields["p"].shape[0]
     for name, f in fields.items():
         if not np.all(np.isfinite(f)):
@@ -386,7 +386,7 @@ def _dataset(sel, depths, data, body, nu, attrs, source) -> xr.Dataset:
              "mirrored frame (x1, x2, -x3): x3 into the indenter; in the global frame "
              "s13 and s23 change sign")
     variables = {}
-    for name, arr in zip(list(COMPONENTS) + ["von_mises"], data):
+    for name, arr in zip(list(COMPONENTS) + ["von_mises"], data, strict=True):
         variables[name] = xr.Variable(FIELD_DIMS, arr, {
             "units": "Pa", "long_name": f"{STRESS_VARIABLES[name]} in the {body}",
             "comment": "tension > 0; " + frame})
@@ -414,7 +414,7 @@ def _refuse_nonfinite(st, fields) -> None:
         if not np.all(np.isfinite(values)):
             bad = np.argwhere(~np.isfinite(values))[0]
             at = ", ".join(f"{d} = {float(st[d].values[i]):g}"
-                           for d, i in zip(st[v].dims, bad))
+                           for d, i in zip(st[v].dims, bad, strict=True))
             raise ArchiveError(f"{v} holds NaN or inf (first at {at}): a stress file is "
                                "never written with them")
 

@@ -236,7 +236,8 @@ def md_errors(collector_or_ds, scene, *, mu, W, a, p0, compliance, every=1):
         hist = T1[:k + 1]
         q = q_rows[k].mean(axis=1)
         ref = an.cell_average(
-            lambda u, v: an.mindlin_deresiewicz_traction(np.hypot(u, v), hist, mu, W, a, p0),
+            lambda u, v, hist=hist: an.mindlin_deresiewicz_traction(np.hypot(u, v), hist, mu,
+                                                                    W, a, p0),
             x1[:, None], x2[None, rows], d1, d2).mean(axis=1)
         r = np.hypot(x1, x2[rows[-1]])
         near = np.zeros(r.shape, bool)

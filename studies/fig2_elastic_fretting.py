@@ -70,7 +70,7 @@ def main(argv=None):
     axp.plot(xs, c.HERTZ.pressure(np.abs(xs) * c.A_H) / c.P_H, color="0.6", lw=3,
              label="Hertz")
     colors = plt.cm.viridis(np.linspace(0, 0.9, len(INSTANTS)))
-    for s, col in zip(INSTANTS, colors):
+    for s, col in zip(INSTANTS, colors, strict=True):
         k = int(np.argmin(np.abs(t / tau - s)))
         hist = T_hist[:k + 1]
         q_md = an.mindlin_deresiewicz_traction(np.abs(xs) * c.A_H, hist, c.MU, c.W, c.A_H,

@@ -112,13 +112,13 @@ def main(argv=None):
     out = c.out_dir(args)
     n, steps = (24, 10) if args.quick else (128, 200)
     runs = [run_window(out, r, n, steps) for r in WINDOWS]
-    infos = [describe(sc, ds, wall, r) for r, (sc, _, ds, wall) in zip(WINDOWS, runs)]
+    infos = [describe(sc, ds, wall, r) for r, (sc, _, ds, wall) in zip(WINDOWS, runs, strict=True)]
 
     fig, axes = plt.subplots(2, 2, figsize=(11.5, 7.6), sharex=True, sharey="row")
     colors = plt.cm.plasma(np.linspace(0, 0.85, len(INSTANTS)))
     xs = np.linspace(-2.0, 2.0, 801)
     creep = maxwell_creep(c.RELAXATION_TIME)
-    for j, (ratio, (scene, _, ds, _)) in enumerate(zip(WINDOWS, runs)):
+    for j, (ratio, (scene, _, ds, _)) in enumerate(zip(WINDOWS, runs, strict=True)):
         x1 = ds.x1.values
         t = ds.time.values
         tau = scene.load.window
@@ -129,7 +129,7 @@ def main(argv=None):
                                      c.NU_STEEL, creep, n_steps=400)
         axp.plot(xs, p_lr / c.P_H, "--", color="0.45", lw=1.5,
                  label=r"Lee-Radok, $t=\tau$ (frictionless)")
-        for s, col in zip(INSTANTS, colors):
+        for s, col in zip(INSTANTS, colors, strict=True):
             k = int(np.argmin(np.abs(t / tau - s)))
             p = c.centre_profile(ds.p.isel(time=k).values)
             q = c.centre_profile(ds.q1.isel(time=k).values)

@@ -557,13 +557,13 @@ def plot(rows, out):
     fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.5 * nrow), squeeze=False)
     grids = sorted({r["grid"] for r in rows})
     cmap = plt.cm.viridis(np.linspace(0, 0.9, len(grids)))
-    color = dict(zip(grids, cmap))
+    color = dict(zip(grids, cmap, strict=True))
     marker = {"auto": "*", "bdf2": "D", "linear": "o", "step_start": "s", "n/a": "o"}
-    for ax, m in zip(axes.flat, measures):
+    for ax, m in zip(axes.flat, measures, strict=False):
         sel = [r for r in rows if r["measure"] == m and np.isfinite(r["error"])]
         floor = 1e-16
         pts = [(r["wall_s"], max(r["error"], floor)) for r in sel]
-        for r, (w, e) in zip(sel, pts):
+        for r, (w, e) in zip(sel, pts, strict=True):
             ax.scatter(w, e, color=color[r["grid"]], marker=marker[r["time_rule"]],
                        s=14 + 6 * math.log2(max(r["steps"], 1) + 1),
                        facecolors="none" if r["time_rule"] == "step_start" else None,

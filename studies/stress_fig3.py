@@ -20,8 +20,8 @@ so the viscoelasticity enters only through the tractions the solver found.
 Default: 128 x 128 cells on the automatic grid, 100 steps, 16 depths; writes
 ``stress_fig3.nc`` (the archive) and ``stress_fig3.png`` in --out and copies the figure
 to docs/figures/stress_fig3.png (the stress field itself, 101 instants x 16 depths x 128^2
-x 7 variables, is 0.5 GB even in float32: ``contactpipe stress`` writes it when wanted). --quick: 24 x 24 cells, 10 steps,
-5 depths, nothing written outside --out.
+x 7 variables, is 0.5 GB even in float32: ``contactpipe stress`` writes it when wanted).
+--quick: 24 x 24 cells, 10 steps, 5 depths, nothing written outside --out.
 """
 from __future__ import annotations
 
@@ -70,7 +70,7 @@ def describe(ds, st, cross, dv, times):
     n = ds.sizes["x1"]
     vm = st["von_mises"]
     k = np.unravel_index(int(np.argmax(vm.values)), vm.shape)
-    at = {d: float(vm[d].values[i]) for d, i in zip(vm.dims, k)}
+    at = {d: float(vm[d].values[i]) for d, i in zip(vm.dims, k, strict=True)}
     info = {
         "grid": n, "instants": ds.sizes["time"], "depths": st.sizes["x3"],
         "von_mises_max_over_pH": float(vm.values[k]) / c.P_H,
@@ -112,7 +112,7 @@ def figure(st, cross, dv, tau):
               "(b) surface s11, t = tau (+T*)",
               "(c) Crossland index over the cycle (f_-1 = 600, t_-1 = 400 MPa)",
               "(d) Dang Van index over the cycle (same limits)"]
-    for ax, title in zip(axes.ravel(), titles):
+    for ax, title in zip(axes.ravel(), titles, strict=True):
         ax.set_title(title, fontsize=9)
     fig.suptitle("Rigid ball on a Maxwell half-space (paper fig. 3, tau = t'): stresses and "
                   "fatigue indices", fontsize=11)

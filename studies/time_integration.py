@@ -200,8 +200,8 @@ def scalar_rows(steps=(40, 80, 160), reference=20480):
         for rule in ("bdf2", "bdf2_plain", "linear", "step_start", "tr_bdf2"):
             if rule == "step_start" and creep.phi0 == 0:
                 continue
-            run = (lambda n: tr_bdf2(creep, n)) if rule == "tr_bdf2" else \
-                (lambda n: held_displacement(creep, n, rule))
+            run = (lambda n, c=creep: tr_bdf2(c, n)) if rule == "tr_bdf2" else \
+                (lambda n, c=creep, r=rule: held_displacement(c, n, r))
             ref = run(reference)
             errs = []
             for n in steps:
@@ -530,7 +530,8 @@ def plot(rows, keep, out):
         ax.set_title("Kelvin–Voigt pressure through the centre", fontsize=9)
         ax.legend(fontsize=7)
     ax = axes[3]
-    colors = dict(zip(LAWS, ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")))
+    colors = dict(zip(LAWS, ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple"),
+                      strict=True))
     for r in rows:
         if r["part"] == "punch_order" and r["law"] != "kelvin_voigt":
             e = [float(v) for v in r["errors"].split()]

@@ -17,7 +17,8 @@ __all__ = ["STEEL", "R", "W", "MU", "E_STAR_STEEL", "A_HERTZ", "P0_HERTZ", "make
            "fretting_scene", "spd_matrix", "box_qp_exact", "box_kkt_violation", "radial_force",
            "md_circles"]
 
-# the paper's elastic case: steel on steel, R = 18 mm, W = 1 kN (Hertz: p0 = 1.996 GPa, a = 0.489 mm)
+# the paper's elastic case: steel on steel, R = 18 mm, W = 1 kN
+# (Hertz: p0 = 1.996 GPa, a = 0.489 mm)
 STEEL = {"material": "elastic", "young": 210e9, "poisson": 0.3}
 R, W, MU = 0.018, 1000.0, 0.1
 E_STAR_STEEL = 1.0 / (2 * (1 - 0.3 ** 2) / 210e9)
@@ -44,7 +45,8 @@ def make_scene(**over):
     for k, v in over.items():
         if v is None:
             d.pop(k, None)
-        elif isinstance(v, dict) and isinstance(d.get(k), dict) and k not in ("indenter", "halfspace", "load", "geometry"):
+        elif (isinstance(v, dict) and isinstance(d.get(k), dict)
+              and k not in ("indenter", "halfspace", "load", "geometry")):
             d[k] = {**d[k], **v}
         else:
             d[k] = v
@@ -71,7 +73,8 @@ def spd_matrix(rng, n, cond=50.0):
 
 def box_qp_exact(A, b, lo, hi, target):
     """Exact minimiser of ½ xᵀAx + bᵀx over {lo ≤ x ≤ hi, Σx = target} by enumerating the
-    active sets (3ᵐ for m movable cells: each at lo, free or at hi; for m ≤ 8), independent of the CG.
+    active sets (3ᵐ for m movable cells: each at lo, free or at hi; for m ≤ 8), independent of
+    the CG.
 
     For each guess the free cells solve the equality-constrained KKT system; the guess is
     the solution when the free cells lie within their bounds and the residual
@@ -87,7 +90,8 @@ def box_qp_exact(A, b, lo, hi, target):
     A, b, lo, hi = (np.asarray(v, float) for v in (A, b, lo, hi))
     n = len(b)
     movable = lo < hi
-    scale = 1.0 + np.abs(b).max() + np.abs(A).max() * (np.abs(np.where(np.isfinite(hi), hi, 0)).max()
+    finite_hi = np.where(np.isfinite(hi), hi, 0)
+    scale = 1.0 + np.abs(b).max() + np.abs(A).max() * (np.abs(finite_hi).max()
                                                         + np.abs(lo).max() + abs(target))
     for states in itertools.product((0, 1, 2), repeat=int(movable.sum())):
         st = np.zeros(n, int)
@@ -119,7 +123,8 @@ def box_qp_exact(A, b, lo, hi, target):
         if np.any(x[free] < lo[free]) or np.any(x[free] > hi[free]):
             continue
         r = A @ x + b - lam
-        if np.any(r[movable & (st == 0)] < -1e-12 * scale) or np.any(r[movable & (st == 2)] > 1e-12 * scale):
+        if (np.any(r[movable & (st == 0)] < -1e-12 * scale)
+                or np.any(r[movable & (st == 2)] > 1e-12 * scale)):
             continue
         return x, lam
     raise AssertionError("no active set satisfies the optimality conditions")
@@ -153,7 +158,7 @@ def radial_force(f, a, breaks=(), epsabs=0.0):
     """int_0^a 2 pi r f(r) dr, split at the given radii (quad: epsrel 1e-12, epsabs)."""
     pts = sorted({0.0, a, *[float(b) for b in breaks if 0.0 < b < a]})
     total = 0.0
-    for lo, hi in zip(pts[:-1], pts[1:]):
+    for lo, hi in zip(pts[:-1], pts[1:], strict=True):
         total += integrate.quad(lambda r: 2 * np.pi * r * float(f(r)), lo, hi,
                                 epsabs=epsabs, epsrel=1e-12, limit=200)[0]
     return total

@@ -53,7 +53,8 @@ def test_hertz_equilibrium_and_cell_average():
 
 
 def test_cell_average_is_exact_for_polynomials():
-    f = lambda x1, x2: x1 ** 4 * x2 ** 2 + 3 * x1 * x2
+    def f(x1, x2):
+        return x1 ** 4 * x2 ** 2 + 3 * x1 * x2
     x1c, x2c, d1, d2 = 0.3, -0.7, 0.2, 0.5
     exact = ((((x1c + d1 / 2) ** 5 - (x1c - d1 / 2) ** 5) / 5)
              * (((x2c + d2 / 2) ** 3 - (x2c - d2 / 2) ** 3) / 3)) / (d1 * d2) + 3 * x1c * x2c
@@ -134,7 +135,8 @@ def test_flat_punch_pressure_and_approach():
     a = FP.contact_radius
     assert FP.approach == pytest.approx(W / (2 * a * E_STAR), rel=1e-14)
     # int 2 pi r p dr with the (a - r)^(-1/2) weight handled by QAWS
-    g = lambda r: 2 * np.pi * r * W / (2 * np.pi * a * np.sqrt(a + r))
+    def g(r):
+        return 2 * np.pi * r * W / (2 * np.pi * a * np.sqrt(a + r))
     force = integrate.quad(g, 0, a, weight="alg", wvar=(0.0, -0.5), epsrel=1e-12)[0]
     assert force == pytest.approx(W, rel=1e-10)
     assert radial_force(FP.pressure, 0.5 * a) == pytest.approx(
@@ -207,7 +209,7 @@ def _punch_cell_force_polar(a, x0, x1, y0, y1):
         brk = np.mod(brk, 2 * np.pi)
     brk = np.unique(np.clip(brk, lo, hi))
     return sum(integrate.quad(ray, u, v, epsabs=0, epsrel=1e-13, limit=200)[0]
-               for u, v in zip(brk[:-1], brk[1:]))
+               for u, v in zip(brk[:-1], brk[1:], strict=True))
 
 
 def test_flat_punch_cut_cells_against_polar_integration():
@@ -261,7 +263,8 @@ def _circles(hist):
 @pytest.mark.parametrize("name", sorted(HISTORIES))
 def test_md_equilibrium_and_friction_bound(name):
     hist = HISTORIES[name]
-    q = lambda r: an.mindlin_deresiewicz_traction(r, hist, MU, W, A, P0)
+    def q(r):
+        return an.mindlin_deresiewicz_traction(r, hist, MU, W, A, P0)
     assert radial_force(q, A, _circles(hist)) == pytest.approx(hist[-1], rel=1e-10)
     r = np.linspace(0, A, 4001)
     assert np.all(np.abs(q(r)) <= MU * HZ.pressure(r) * (1 + 1e-10) + 1e-9 * P0)
@@ -278,7 +281,8 @@ def test_md_unloading_closed_form():
     c_star = A * (1 - TS / MUW) ** (1 / 3)
     c_prime = A * (1 - (TS - t) / (2 * MUW)) ** (1 / 3)
     r = np.linspace(0, 1.1 * A, 501)
-    sq = lambda c: np.sqrt(np.clip(c * c - r * r, 0, None))
+    def sq(c):
+        return np.sqrt(np.clip(c * c - r * r, 0, None))
     ref = -MU * P0 / A * (sq(A) - 2 * sq(c_prime) + sq(c_star))
     np.testing.assert_allclose(an.mindlin_deresiewicz_traction(r, [TS, t], MU, W, A, P0),
                                ref, rtol=1e-13, atol=1e-12 * P0)
@@ -340,8 +344,10 @@ def test_md_masing_nested_subcycles():
     # closing the inner sub-cycle (back through t3) wipes (t3, t4)
     hist_in = [t1, t2, t3, t4, 0.7 * TS]
     assert an.masing_memory(hist_in) == ((t1, t2), 0.7 * TS)
-    d = lambda h: an.tangential_displacement(h, MU, W, A, C_SUM)
-    q = lambda h: an.mindlin_deresiewicz_traction(np.linspace(0, A, 101), h, MU, W, A, P0)
+    def d(h):
+        return an.tangential_displacement(h, MU, W, A, C_SUM)
+    def q(h):
+        return an.mindlin_deresiewicz_traction(np.linspace(0, A, 101), h, MU, W, A, P0)
     assert d(hist_in) == pytest.approx(d([t1, t2, 0.7 * TS]), rel=1e-13)
     np.testing.assert_allclose(q(hist_in), q([t1, t2, 0.7 * TS]), rtol=1e-12, atol=1e-9 * P0)
     # return-point memory: back at t3 the state is the one left at t3
@@ -351,7 +357,8 @@ def test_md_masing_nested_subcycles():
     assert an.masing_memory(hist_out) == ((), 0.9 * MUW)
     assert d(hist_out) == pytest.approx(d([0.9 * MUW]), rel=1e-13)
     # explicit Masing branch inside the inner sub-cycle
-    dv = lambda f: np.sign(f) * 3 * MUW * C_SUM / (16 * A) * (1 - (1 - abs(f) / MUW) ** (2 / 3))
+    def dv(f):
+        return np.sign(f) * 3 * MUW * C_SUM / (16 * A) * (1 - (1 - abs(f) / MUW) ** (2 / 3))
     t = 0.1 * TS
     ref = dv(t1) + 2 * dv((t2 - t1) / 2) + 2 * dv((t3 - t2) / 2) + 2 * dv((t4 - t3) / 2) \
         + 2 * dv((t - t4) / 2)
@@ -364,8 +371,10 @@ def test_md_masing_nested_subcycles():
 @pytest.mark.parametrize("frac", [0.05, 0.5, 0.95])
 def test_energy_per_cycle_equals_loop_area(frac):
     ts = frac * MUW
-    down = lambda t: an.tangential_displacement([ts, t], MU, W, A, C_SUM)
-    up = lambda t: an.tangential_displacement([ts, -ts, t], MU, W, A, C_SUM)
+    def down(t):
+        return an.tangential_displacement([ts, t], MU, W, A, C_SUM)
+    def up(t):
+        return an.tangential_displacement([ts, -ts, t], MU, W, A, C_SUM)
     area = integrate.quad(lambda t: down(t) - up(t), -ts, ts, epsabs=0, epsrel=1e-12)[0]
     e = an.energy_per_cycle(ts, MU, W, A, C_SUM)
     assert e > 0
@@ -414,17 +423,18 @@ def test_lee_radok_kelvin_voigt():
 def test_lee_radok_ramp_hereditary_integral(creep):
     knots_t, knots_w = [0.5, 2.0, 2.0, 4.0], [2.0, 8.0, 9.0, 10.0]
     pref = 3 * R_V * (1 - NU_V ** 2) / (4 * E_V)
-    phi = lambda u: float(creep(u))
+    def phi(u):
+        return float(creep(u))
     for t in [0.2, 0.5, 1.3, 2.0, 3.1, 7.0]:
         got = float(an.lee_radok_radius(t, knots_t, knots_w, R_V, E_V, NU_V, creep))
         if t < 0.5:
             assert got == 0.0
             continue
         acc = 2.0 * phi(t - 0.5)
-        acc += integrate.quad(lambda s: phi(t - s) * 4.0, 0.5, min(t, 2.0), epsrel=1e-12)[0]
+        acc += integrate.quad(lambda s, t=t: phi(t - s) * 4.0, 0.5, min(t, 2.0), epsrel=1e-12)[0]
         if t >= 2.0:
             acc += 1.0 * phi(t - 2.0)
-            acc += integrate.quad(lambda s: phi(t - s) * 0.5, 2.0, min(t, 4.0),
+            acc += integrate.quad(lambda s, t=t: phi(t - s) * 0.5, 2.0, min(t, 4.0),
                                   epsrel=1e-12)[0]
         assert got == pytest.approx((pref * acc) ** (1 / 3), rel=1e-9)
     # a single step is lee_radok_sphere
@@ -480,7 +490,8 @@ def test_lee_radok_pressure():
     pref = 2 * E_V / (np.pi * R_V * (1 - NU_V ** 2))
 
     def p_ref(rr):
-        h = lambda s: np.sqrt(max(a0 ** 2 * (1 + s / tp) ** (2 / 3) - rr ** 2, 0.0))
+        def h(s):
+            return np.sqrt(max(a0 ** 2 * (1 + s / tp) ** (2 / 3) - rr ** 2, 0.0))
         s_on = max(((rr / a0) ** 3 - 1) * tp, 0.0)
         integral = integrate.quad(lambda s: np.exp(-(t - s) / tp) / tp * h(s), s_on, t,
                                   epsabs=0, epsrel=1e-11)[0]
@@ -495,7 +506,8 @@ def test_lee_radok_pressure():
     for creep in (mx, mat.zener(3e9, 1e9, 1.5)):
         for tt in (0.5, 4.0):
             at = float(an.lee_radok_sphere(tt, W_V, R_V, E_V, NU_V, creep).contact_radius)
-            p = lambda x: an.lee_radok_pressure(x, tt, W_V, R_V, E_V, NU_V, creep)
+            def p(x, tt=tt, creep=creep):
+                return an.lee_radok_pressure(x, tt, W_V, R_V, E_V, NU_V, creep)
             assert _force_axisym(p, at, a0) == pytest.approx(W_V, rel=1e-6)
 
 

@@ -54,7 +54,7 @@ def synthetic_steps():
     s1 = np.zeros((N1, N2))
     dissipation = 0.0
     steps = []
-    for k, (t, c) in enumerate(zip(TIMES, [0.2, 0.5, -0.5, 0.5])):
+    for k, (t, c) in enumerate(zip(TIMES, [0.2, 0.5, -0.5, 0.5], strict=True)):
         p = 1e9 * (1 + 0.1 * k) * shape
         slip = rim if k else np.zeros_like(rim)
         q1 = np.where(slip, np.sign(c) * MU * p, c * MU * p)

@@ -103,7 +103,8 @@ def test_box_cg_kkt_and_slsqp_on_forty_cells(seed, kind, restore):
     assert box_kkt_violation(A, b, lo, hi, target, r.x, r.multiplier) < 1e-11
     ref = minimize(lambda x: objective(A, b, x), np.full(n, target / n),
                    jac=lambda x: A @ x + b, method="SLSQP",
-                   bounds=[(l_, None if np.isinf(h_) else h_) for l_, h_ in zip(lo, hi)],
+                   bounds=[(l_, None if np.isinf(h_) else h_)
+                           for l_, h_ in zip(lo, hi, strict=True)],
                    constraints=[{"type": "eq", "fun": lambda x: x.sum() - target,
                                  "jac": lambda x: np.ones(n)}],
                    options={"ftol": 1e-15, "maxiter": 2000})
@@ -243,7 +244,8 @@ def feasible_point(lo, hi, target, weights, direction, step):
 
 def _tol(y, lo, hi, target):
     finite_hi = np.where(np.isfinite(hi), hi, 0.0)
-    return 1e-12 * (1.0 + np.abs(y).sum() + np.abs(lo).sum() + np.abs(finite_hi).sum() + abs(target))
+    return 1e-12 * (1.0 + np.abs(y).sum() + np.abs(lo).sum() + np.abs(finite_hi).sum()
+                    + abs(target))
 
 
 @settings(max_examples=100)
@@ -351,7 +353,8 @@ def test_box_cg_with_rows_kkt_and_slsqp(seed, kind, m):
              "jac": (lambda x, i=i: C.rows[i])} for i in range(m)]
     ref = minimize(lambda x: objective(A, b, x), np.clip(np.full(40, 0.1), lo, hi),
                    jac=lambda x: A @ x + b, method="SLSQP",
-                   bounds=[(l_, None if np.isinf(h_) else h_) for l_, h_ in zip(lo, hi)],
+                   bounds=[(l_, None if np.isinf(h_) else h_)
+                           for l_, h_ in zip(lo, hi, strict=True)],
                    constraints=cons, options={"ftol": 1e-15, "maxiter": 2000})
     np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-6 * np.abs(ref.x).max())
 
@@ -361,10 +364,10 @@ def test_box_cg_one_sum_row_equals_the_force_target():
     the same x within 1e-12 of max|x| and the same multiplier (1e-12 of max|Ax + b|)."""
     for kind, restore in (("one-sided", "scale"), ("two-sided", "shift")):
         A, b, lo, hi, target = problem(3, 20, kind)
-        ref = box_cg(lambda x: A @ x, b, lo, hi, target, np.zeros(20),
+        ref = box_cg(lambda x, A=A: A @ x, b, lo, hi, target, np.zeros(20),
                      BoxOptions(tol=1e-13, max_iter=500, restore=restore))
-        r = box_cg(lambda x: A @ x, b, lo, hi, Constraints([np.ones(20)], [target]), np.zeros(20),
-                   BoxOptions(tol=1e-13, max_iter=500, restore=restore))
+        r = box_cg(lambda x, A=A: A @ x, b, lo, hi, Constraints([np.ones(20)], [target]),
+                   np.zeros(20), BoxOptions(tol=1e-13, max_iter=500, restore=restore))
         assert r.converged and ref.converged
         np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-12 * np.abs(ref.x).max())
         g = np.abs(A @ ref.x + b).max()
@@ -423,13 +426,13 @@ def test_project_rows_is_the_euclidean_projection(seed, kind, m):
     assert np.abs(C.residual(P)).max() <= 1e-12 * (1 + np.abs(y).sum())
     flat = y.ravel()
     if kind == "box":
-        bounds = list(zip(lo.ravel(), hi.ravel()))
+        bounds = list(zip(lo.ravel(), hi.ravel(), strict=True))
         ineq = []
     else:
         bounds = None
         ineq = [{"type": "ineq", "fun": lambda x: rho.ravel() ** 2 - x[:n] ** 2 - x[n:] ** 2}]
-    eq = [{"type": "eq", "fun": (lambda x, r=r.ravel(), f=f: r @ x - f)}
-          for r, f in zip(rows, C.target)]
+    eq = [{"type": "eq", "fun": (lambda x, r=r, f=f: r.ravel() @ x - f)}
+          for r, f in zip(rows, C.target, strict=True)]
     ref = minimize(lambda x: 0.5 * np.sum((x - flat) ** 2), inside.ravel(),
                    jac=lambda x: x - flat, method="SLSQP", bounds=bounds,
                    constraints=eq + ineq, options={"ftol": 1e-15, "maxiter": 1000})

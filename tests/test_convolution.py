@@ -12,9 +12,9 @@ def direct_linear_convolution(kernel_wrap, x):
     u = np.zeros_like(x)
     for i in range(n1):
         for j in range(n2):
-            for l in range(n1):
+            for k in range(n1):
                 for m in range(n2):
-                    u[i, j] += kernel_wrap[(i - l) % (2 * n1), (j - m) % (2 * n2)] * x[l, m]
+                    u[i, j] += kernel_wrap[(i - k) % (2 * n1), (j - m) % (2 * n2)] * x[k, m]
     return u
 
 
@@ -64,7 +64,8 @@ def test_block_convolution_on_fftw_buffers_agrees_with_scipy():
     n1, n2 = 12, 10
     k = body_kernels(n1, n2, 1e-5, 2e-5, 210e9, 0.3)
     a, b = Convolver(n1, n2, backend="pyfftw"), Convolver(n1, n2, backend="scipy")
-    spec = lambda c, comp: None if comp is None else c.kernel_spectrum(k[comp])
+    def spec(c, comp):
+        return None if comp is None else c.kernel_spectrum(k[comp])
     layout = [["11", "12", "13"], ["21", None, "23"], [None, None, "33"], [None, "32", None]]
     xs = [rng.normal(size=(n1, n2)), rng.normal(size=(n1, n2)), None]
     ua = a.convolve_matrix([[spec(a, c) for c in row] for row in layout], xs)
@@ -99,8 +100,8 @@ def test_periodic_filter_is_the_circular_convolution(backend):
     for f in range(2):
         for i in range(n1):
             for j in range(n2):
-                ref[f, i, j] = sum(kernel[(i - l) % n1, (j - m) % n2] * x[f, l, m]
-                                   for l in range(n1) for m in range(n2))
+                ref[f, i, j] = sum(kernel[(i - k) % n1, (j - m) % n2] * x[f, k, m]
+                                   for k in range(n1) for m in range(n2))
     scale = np.abs(ref).max()
     np.testing.assert_allclose(conv.periodic_filter(sigma, x[0]), ref[0], atol=1e-12 * scale)
     out = np.empty_like(x)

@@ -421,7 +421,8 @@ def test_block_sums_rows():
     B = rng.normal(size=(m, m))
     A = B @ B.T / m + np.eye(m)
     b = rng.normal(size=m)
-    apply = lambda v: (A @ v.ravel()).reshape(2, 6, 6)
+    def apply(v):
+        return (A @ v.ravel()).reshape(2, 6, 6)
     res = box_cg(apply, b.reshape(2, 6, 6), lo, hi, rows, np.zeros((2, 6, 6)),
                  BoxOptions(tol=1e-14, max_iter=5000, restore="shift"))
     assert res.converged
@@ -444,7 +445,8 @@ def _dense_box_qp(A, b, lo, hi, targets):
                                    - targets[k])} for k in range(2)]
     x0 = np.concatenate([np.full(m // 2, targets[0] / (m // 2)), np.zeros(m // 2)])
     r = minimize(lambda x: 0.5 * x @ A @ x + b @ x, x0, jac=lambda x: A @ x + b,
-                 bounds=list(zip(lo, np.where(np.isinf(hi), None, hi))), constraints=cons,
+                 bounds=list(zip(lo, np.where(np.isinf(hi), None, hi), strict=True)),
+                 constraints=cons,
                  method="SLSQP", options={"ftol": 1e-15, "maxiter": 2000})
     return r.x
 

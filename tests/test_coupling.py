@@ -179,7 +179,7 @@ def test_preconditioned_vector_passes_reach_the_diagonally_scaled_instants():
     before the filter's two bands and the per-cell turn limit)."""
     fast, fast_pairs = _vector_path(False)
     slow, slow_pairs = _vector_path(False, precondition=False)
-    for a, b in zip(fast, slow):
+    for a, b in zip(fast, slow, strict=True):
         scale = float(b.p.max())
         assert np.abs(a.p - b.p).max() <= 1e-7 * scale
         assert np.abs(a.q - b.q).max() <= 1e-7 * MU * scale
@@ -245,7 +245,7 @@ def test_vector_warm_starts_reach_the_plain_instants():
     its corrections folded into its steps; 686 against 3110 before)."""
     fast, fast_pairs = _vector_path(False)
     plain, plain_pairs = _vector_path(True)
-    for a, b in zip(fast, plain):
+    for a, b in zip(fast, plain, strict=True):
         scale = float(b.p.max())
         assert np.abs(a.p - b.p).max() <= 1e-7 * scale
         assert np.abs(a.q - b.q).max() <= 1e-7 * MU * scale

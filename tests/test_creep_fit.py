@@ -131,7 +131,7 @@ R_SPHERE, W_LOAD, NU = 0.018, 1000.0, 0.3
 
 
 def write_table(path, columns, header="time, value"):
-    rows = "\n".join(", ".join(f"{v:.17g}" for v in row) for row in zip(*columns))
+    rows = "\n".join(", ".join(f"{v:.17g}" for v in row) for row in zip(*columns, strict=True))
     path.write_text(f"# synthetic material data\n{header}\n{rows}\n")
     return path
 

@@ -46,7 +46,8 @@ def test_loop_force_follows_masing_below_gross_slip():
     the forces returns the displacements (1e-12 delta_gs)."""
     history = np.array([0.0, 0.6, -0.3, 0.2, -0.1, 0.4, -0.7, 0.5, 0.9]) * D_GS
     path = np.concatenate([np.linspace(a, b, 30, endpoint=False)
-                           for a, b in zip(history[:-1], history[1:])] + [history[-1:]])
+                           for a, b in zip(history[:-1], history[1:], strict=True)]
+                          + [history[-1:]])
     T = an.displacement_loop_force(path, MU, W, A_HERTZ, C_SUM)
     back = an.tangential_displacement(T, MU, W, A_HERTZ, C_SUM, all_instants=True)
     np.testing.assert_allclose(back, path, rtol=0, atol=1e-12 * D_GS)

@@ -90,7 +90,8 @@ def test_energy_ratio_closed_form():
 # --------------------------------------------------------------------------- loops
 def closed_form_loop(knots, per=400):
     """omega (x delta_gs knots, ``per`` samples per interval) and the closed-form T."""
-    om = np.concatenate([np.linspace(a, b, per + 1)[:-1] for a, b in zip(knots[:-1], knots[1:])]
+    om = np.concatenate([np.linspace(a, b, per + 1)[:-1]
+                         for a, b in zip(knots[:-1], knots[1:], strict=True)]
                         + [np.array(knots[-1:])]) * D_GS
     return om, an.displacement_loop_force(om, MU, W, A_HERTZ, C_SUM)
 

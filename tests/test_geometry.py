@@ -115,7 +115,8 @@ def test_surface_npy_of_the_wrong_shape(tmp_path):
 def test_surface_netcdf_not_covering_the_grid(tmp_path):
     x = np.linspace(-5e-4, 5e-4, 11)
     f = write_nc(tmp_path / "small.nc", x, x, np.zeros((11, 11)))
-    with pytest.raises(SceneError, match=r"geometry\.file .*small\.nc.*does not cover the grid: the grid's x1 runs from .* outside the file's x1"):
+    with pytest.raises(SceneError, match=r"geometry\.file .*small\.nc.*does not cover the grid: "
+                                         r"the grid's x1 runs from .* outside the file's x1"):
         g.surface_gap(X1, X2, f)
 
 

@@ -112,7 +112,7 @@ def test_auto_grid_runs_a_fitted_table(tmp_path):
     table = tmp_path / "creep.csv"
     t = [0.0, 0.01, 0.1, 1.0, 10.0, 100.0]
     D = [1e-9 * f for f in (1.0, 1.2, 1.6, 2.5, 4.0, 5.0)]
-    table.write_text("time,compliance\n" + "".join(f"{a},{b}\n" for a, b in zip(t, D)))
+    table.write_text("time,compliance\n" + "".join(f"{a},{b}\n" for a, b in zip(t, D, strict=True)))
     body = {"material": "viscoelastic", "poisson": 0.3, "creep": "fit",
             "file": str(table), "table_kind": "creep"}
     s = scene(RIGID, body, {"time": [0.0, 5.0, 10.0], "normal_force": [2.0, 4.0, 4.0],

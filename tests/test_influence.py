@@ -289,7 +289,7 @@ def test_body_kernels_layout(n1, n2):
     d1, d2 = 1e-6, 2e-6
     k = body_kernels(n1, n2, d1, d2, E, NU)
     assert set(k) == set(KEYS)
-    for key, v in k.items():
+    for v in k.values():
         assert v.shape == (2 * n1, 2 * n2) and v.dtype == np.float64
         assert np.all(v[n1, :] == 0.0) and np.all(v[:, n2] == 0.0)
         assert np.all(np.isfinite(v))

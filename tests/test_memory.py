@@ -69,7 +69,8 @@ def lee_radok_error(ds, creep, t_min=0.0):
 
 CASES = {
     "maxwell": ({"creep": "maxwell", "relaxation_time": 1.0}, maxwell(1.0)),
-    "zener": ({"creep": "zener", "relaxed_young": E / 3, "retardation_time": 0.5}, zener(E, E / 3, 0.5)),
+    "zener": ({"creep": "zener", "relaxed_young": E / 3, "retardation_time": 0.5},
+              zener(E, E / 3, 0.5)),
 }
 
 

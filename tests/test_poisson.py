@@ -218,7 +218,7 @@ def test_body_memory_state_round_trip():
     b.load_state({k: np.array(v) for k, v in a.state().items()})
     for _ in range(3):
         assert b.instant_weight == a.instant_weight
-        for x, y in zip(a.known(), b.known()):
+        for x, y in zip(a.known(), b.known(), strict=True):
             np.testing.assert_array_equal(x, y)
         s = rng.normal(size=(3, 4))
         a.commit(s)

@@ -363,7 +363,7 @@ def test_public_names_load_on_first_use():
         assert getattr(cp, name) is not None, name
     assert cp.analytic.hertz is not None
     with pytest.raises(AttributeError):
-        cp.no_such_name
+        _ = cp.no_such_name
 
 
 # ---------------------------------------------------------------- 23: mixed mu axis

@@ -153,7 +153,8 @@ def test_digest_counts_physics_not_output():
 
 
 def test_digest_is_stable_across_processes():
-    code = ("import sys; from contactpipe.files import loads_toml; from contactpipe.scene import Scene; "
+    code = ("import sys; from contactpipe.files import loads_toml; "
+            "from contactpipe.scene import Scene; "
             "print(Scene.from_dict(loads_toml(sys.stdin.read())).digest())")
     out = subprocess.run([sys.executable, "-c", code], input=TINY_FRETTING, text=True,
                          capture_output=True, cwd=REPO, check=True,
@@ -262,9 +263,9 @@ def test_fretting_preset_equals_the_explicit_knots():
     del d["load"]["time"], d["load"]["tangential_force"]
     d["load"]["fretting"] = {"amplitude": 90.0, "window": 1.0}
     preset = Scene.from_dict(d)
-    for a, b in zip(preset.load.knots(), explicit.load.knots()):
+    for a, b in zip(preset.load.knots(), explicit.load.knots(), strict=True):
         np.testing.assert_array_equal(a, b)
-    for a, b in zip(preset.instants(), explicit.instants()):
+    for a, b in zip(preset.instants(), explicit.instants(), strict=True):
         np.testing.assert_allclose(a, b, atol=1e-12)
     assert preset.load.fretting.cycles == 1 and preset.load.window == 1.0
     assert Scene.from_toml_text(preset.to_toml()) == preset
@@ -529,7 +530,7 @@ def body_dicts(draw, allow_rigid=True):
         t = np.concatenate([[0.0], np.cumsum(dt)])
         phi0 = draw(st.sampled_from([0.0, 1.0]))
         phi = np.concatenate([[phi0], phi0 + 0.1 + np.cumsum(dphi)])
-        d["table"] = [[float(a), float(b)] for a, b in zip(t, phi)]
+        d["table"] = [[float(a), float(b)] for a, b in zip(t, phi, strict=True)]
     return d
 
 
@@ -586,11 +587,11 @@ def scene_dicts(draw):
         if mu > 0 and draw(st.booleans()):
             frac = [draw(st.floats(-0.9, 0.9, **finite)) for _ in range(n)]
             if draw(st.booleans()):
-                load["tangential_force"] = [f * mu * w for f, w in zip(frac, W)]
+                load["tangential_force"] = [f * mu * w for f, w in zip(frac, W, strict=True)]
             else:
                 ang = [draw(st.floats(0, 2 * math.pi, **finite)) for _ in range(n)]
                 load["tangential_force"] = [[f * mu * w * math.cos(a), f * mu * w * math.sin(a)]
-                                            for f, w, a in zip(frac, W, ang)]
+                                            for f, w, a in zip(frac, W, ang, strict=True)]
     if draw(st.booleans()):
         load["preload"] = draw(st.sampled_from(["frictional", "frictionless"]))
     window = (load["fretting"]["window"] if "fretting" in load
@@ -679,7 +680,7 @@ INVALID = [
     ("friction.mu", st.one_of(st.floats(max_value=0.0899, allow_nan=False), not_a_number)),
     ("load.normal_force", st.one_of(st.floats(-1e6, 899.0), not_a_number)),
     ("load.time", st.lists(st.floats(-1, 1, allow_nan=False), min_size=4, max_size=4).filter(
-        lambda t: any(b <= a for a, b in zip(t, t[1:])))),
+        lambda t: any(b <= a for a, b in zip(t, t[1:], strict=False)))),
     ("load.tangential_force", st.lists(st.floats(-80, 80), min_size=0, max_size=3)),
     ("load.preload", st.text(max_size=8)),
     ("grid.points", st.one_of(st.lists(st.integers(-10, 7), min_size=2, max_size=2),

@@ -128,7 +128,8 @@ def test_cli_bad_scene_one_line(tmp_path):
 
 
 def test_cli_missing_file(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run", str(tmp_path / "no.toml"),
+    r = subprocess.run([sys.executable, "-m", "contactpipe.pipeline.cli", "run",
+                        str(tmp_path / "no.toml"),
                         "-o", str(tmp_path / "o.nc")], capture_output=True, text=True)
     assert r.returncode != 0 and len(r.stderr.strip().splitlines()) == 1
 

@@ -167,8 +167,9 @@ def test_kernel_equilibrium():
     rmax = 200.0
     edges = np.array([0.0, 0.5, 1.0, 2.0, 5.0, 12.0, 30.0, 80.0, rmax])
     g, w = np.polynomial.legendre.leggauss(32)
-    rs = np.concatenate([(b - a) / 2 * g + (a + b) / 2 for a, b in zip(edges, edges[1:])])
-    wr = np.concatenate([(b - a) / 2 * w for a, b in zip(edges, edges[1:])])
+    spans = list(zip(edges[:-1], edges[1:], strict=True))
+    rs = np.concatenate([(b - a) / 2 * g + (a + b) / 2 for a, b in spans])
+    wr = np.concatenate([(b - a) / 2 * w for a, b in spans])
     th = np.linspace(0, 2 * np.pi, 256, endpoint=False)
     X = rs[:, None] * np.cos(th)[None]
     Y = rs[:, None] * np.sin(th)[None]
@@ -369,7 +370,7 @@ def test_equilibrium_on_depth_planes():
         ft = _cerruti_fraction(half, z)
         fn = _holl_fraction(half, z)
         expect = (T[0] * ft, T[1] * ft, Wt * fn)
-        for got, want, name in zip(carried, expect, ("T1", "T2", "W")):
+        for got, want, name in zip(carried, expect, ("T1", "T2", "W"), strict=True):
             assert abs(got - want) <= 1e-5 * Wt, \
                 f"{name} through x3 = {z / A:.2f} a: {got:.6g} N, expected {want:.6g} N"
 

@@ -242,7 +242,8 @@ def test_failing_member_others_complete_cli_exit_1(client, tmp_path, capsys):
     inline = CREEP.replace("\n[", "\n[scene.").replace('name = "tiny-creep"',
                                                       '[scene]\nname = "tiny-creep"')
     # left to the run: the member off its grid fails with a GridError, the others land
-    inline = inline.replace("size = [2.4e-3, 2.4e-3]", "size = [2.4e-3, 2.4e-3]\nsize_check = false")
+    inline = inline.replace("size = [2.4e-3, 2.4e-3]",
+                            "size = [2.4e-3, 2.4e-3]\nsize_check = false")
     sweep_file.write_text(f'mode = "product"\n{inline}\n[axes]\n'
                           f'load.normal_force = [1000.0, {TOO_BIG}]\n')
     out = tmp_path / "runs"

@@ -87,7 +87,8 @@ def test_coupling_shifts_pressure_to_trailing_side():
                               "tangential_force": [0.0, 0.8 * MU * W], "preload": preload},
                         grid={"points": [64, 64], "size": [4 * A_HERTZ] * 2}, time={"steps": 8})
         ds = cp.simulate(sc)
-        assert "coupling=gauss_seidel" in ds.attrs["models"] and f"preload={preload}" in ds.attrs["models"]
+        assert "coupling=gauss_seidel" in ds.attrs["models"]
+        assert f"preload={preload}" in ds.attrs["models"]
         assert np.all(ds.coupling_passes.values[1:] > 1)
         p, x1 = ds.p.values, ds.x1.values
         xc = (p * x1[None, :, None]).sum(axis=(1, 2)) / p.sum(axis=(1, 2))
@@ -107,7 +108,8 @@ def test_spence_shear_during_frictional_preload():
     assert np.abs(q0).max() > 0.01 * MU * float(fr.p.isel(time=0).max())
     np.testing.assert_allclose(q0, -q0[::-1, :], atol=1e-6 * np.abs(q0).max())
     assert abs(float(fr.T1[0])) < 1e-9 * W
-    nf = cp.simulate(make_scene(load={"time": [0.0, 1.0], "normal_force": W, "preload": "frictionless",
+    nf = cp.simulate(make_scene(load={"time": [0.0, 1.0], "normal_force": W,
+                                      "preload": "frictionless",
                                       "tangential_force": [0.0, 0.5 * MU * W]}, **base))
     assert np.all(nf.q1.isel(time=0).values == 0)
 

@@ -130,7 +130,7 @@ def slsqp_tangential(K, b, rho, target, vector):
     else:
         cons = [{"type": "eq", "fun": lambda x: np.array([x.sum() - tgt[0]]),
                  "jac": lambda x: np.ones((1, m))}]
-        bounds, x0 = list(zip(-r, r)), np.full(m, tgt[0] / m)
+        bounds, x0 = list(zip(-r, r, strict=True)), np.full(m, tgt[0] / m)
     res = minimize(lambda x: 0.5 * x @ An @ x + bn @ x, x0, jac=lambda x: An @ x + bn,
                    method="SLSQP", bounds=bounds, constraints=cons,
                    options={"ftol": 1e-14, "maxiter": 500})
@@ -160,7 +160,8 @@ def test_solve_scalar_equals_the_exact_active_set_solution(seed):
     assert res.converged
     np.testing.assert_allclose(res.q[0].ravel(), x_ex, rtol=0, atol=1e-12)
     assert np.all(res.q[1] == 0) and res.domega[1] == 0 and np.all(res.Aq[1] == 0)
-    np.testing.assert_allclose(res.Aq[0].ravel(), K11 @ x_ex, rtol=0, atol=1e-12 * np.abs(K11).max())
+    np.testing.assert_allclose(res.Aq[0].ravel(), K11 @ x_ex, rtol=0,
+                               atol=1e-12 * np.abs(K11).max())
     if lam_ex is not None:
         assert res.domega[0] == pytest.approx(lam_ex, rel=0, abs=1e-12 * (1 + abs(lam_ex)))
 
@@ -255,8 +256,8 @@ def test_a_force_the_bounds_cannot_carry_has_a_finite_residual(elastic, bound_sc
 
 def test_warm_starts_and_iteration_cap(elastic):
     """Elastic 6 x 6, T = 0.5 Σμp Δ at 37°. Scalar form from its own solution with A q0:
-    one iteration, one operator application, q unchanged to 1e-13 μp0 (measured 4e-14). Vector form from
-    its own solution: converged again at the same q within 1e-8 μp0 (its stopping test is
+    one iteration, one operator application, q unchanged to 1e-13 μp0 (measured 4e-14). Vector
+    form from its own solution: converged again at the same q within 1e-8 μp0 (its stopping test is
     the step size, so the restart is not a fixed point: measured 16-70 iterations to
     re-converge at tolerance 1e-10 and q moved by up to 2e-9 μp0). A cap of 2 iterations
     from zero reports converged=False for both forms."""
@@ -365,7 +366,10 @@ def test_multiplier_follows_a_rigid_shift(elastic, form, regime):
 
 
 # --------------------------------------------------------------------------- disk projections
-def _cells(n, values=st.floats(-5.0, 5.0, allow_subnormal=False)):
+_FLOATS = st.floats(-5.0, 5.0, allow_subnormal=False)
+
+
+def _cells(n, values=_FLOATS):
     return st.lists(values, min_size=n, max_size=n).map(np.array)
 
 
@@ -374,7 +378,8 @@ def disk_sets(draw, max_n=10):
     """(y (2, 1, n), ρ (1, n), target (2,)) with |target| < Σρ; some ρ = 0."""
     n = draw(st.integers(1, max_n))
     y = np.stack([draw(_cells(n)), draw(_cells(n))])[:, None, :]
-    rho = draw(_cells(n, st.sampled_from([0.0, 0.5, 1.0]) | st.floats(0.0, 2.0, allow_subnormal=False)))[None, :]
+    values = st.sampled_from([0.0, 0.5, 1.0]) | st.floats(0.0, 2.0, allow_subnormal=False)
+    rho = draw(_cells(n, values))[None, :]
     frac = draw(st.floats(0.0, 0.999))
     angle = draw(st.floats(0.0, 2 * np.pi))
     target = frac * rho.sum() * np.array([np.cos(angle), np.sin(angle)])

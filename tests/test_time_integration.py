@@ -155,7 +155,7 @@ def test_tabulated_creep_bdf2():
         b.commit(s)
     table = TabulatedCreep(t=(0.0, 0.5, 1.0, 3.0), phi=(0.0, 0.6, 0.8, 1.0))
     for s in (0.3, 2.0 + 1.0j, 10.0 - 3.0j):
-        def part(t, f):
+        def part(t, f, s=s):
             return f(np.exp(-s * t) * table.derivative(t))
         quad = sum(integrate.quad(part, lo, hi, args=(np.real,))[0]
                    + 1j * integrate.quad(part, lo, hi, args=(np.imag,))[0]
@@ -369,8 +369,9 @@ def test_step_start_bound_is_sharp(seed):
 # --------------------------------------------------------------------------- Lee-Radok fields
 def test_kelvin_voigt_pressure_carries_the_load():
     """analytic.lee_radok_pressure for phi(0) = 0: Kelvin-Voigt equals the closed form
-    above to round-off (r up to 1.2 a but not at the singular edge, t = 0.1, 0.5, 2 tau) and integrates to W (radial
-    quadrature with the edge singularity taken by the substitution r = a sin(theta)); a
+    above to round-off (r up to 1.2 a but not at the singular edge, t = 0.1, 0.5, 2 tau) and
+    integrates to W (radial quadrature with the edge singularity taken by the substitution
+    r = a sin(theta)); a
     two-term Kelvin chain (no closed form: its regular relaxation part integrated by the
     product-trapezoid rule, 4000 steps) carries W within 1e-6 (measured 2e-8)."""
     chain = ExponentialCreep(a=1.0, d=(-0.4, -0.6), tau=(0.3, 2.0))
@@ -379,13 +380,13 @@ def test_kelvin_voigt_pressure_carries_the_load():
         r = np.linspace(0.0, 1.2 * a, 24)              # r = a (singular) left out
         np.testing.assert_allclose(lee_radok_p("kelvin_voigt", r, t),
                                    kelvin_voigt_closed_form(r, t), rtol=1e-12, atol=0)
-        force = integrate.quad(lambda th: lee_radok_p("kelvin_voigt", a * np.sin(th), t)
+        force = integrate.quad(lambda th, a=a, t=t: lee_radok_p("kelvin_voigt", a * np.sin(th), t)
                                * 2 * np.pi * a * np.sin(th) * a * np.cos(th), 0, np.pi / 2,
                                limit=200)[0]
         assert force == pytest.approx(W, rel=1e-8)
     for t in (0.2, 1.0):
         a = ((3 * W * R * (1 - NU ** 2) / (4 * E)) * float(chain(t))) ** (1 / 3)
-        force = integrate.quad(lambda th: float(an.lee_radok_pressure(
+        force = integrate.quad(lambda th, a=a, t=t: float(an.lee_radok_pressure(
             np.array([a * np.sin(th)]), t, W, R, E, NU, chain, n_steps=4000)[0])
             * 2 * np.pi * a * np.sin(th) * a * np.cos(th), 0, np.pi / 2, limit=200)[0]
         assert force == pytest.approx(W, rel=1e-6)
@@ -413,8 +414,9 @@ def test_kelvin_voigt_issue_case_linear_rule():
 
 def test_stiff_zener_issue_case():
     """Issue 9, case 2: Zener E0/Einf = 100, tau = 1 s, steps of 0.1 tau (20 over 2 tau),
-    96^2 auto-sized, "auto" (here "bdf2"): radius within 1 cell for t >= 0.25 tau (measured 0.19), no hole (0),
-    no zigzag (0), field within 3 % of the centre pressure for t >= 0.7 tau (2.5 %; the
+    96^2 auto-sized, "auto" (here "bdf2"): radius within 1 cell for t >= 0.25 tau (measured
+    0.19), no hole (0), no zigzag (0), field within 3 % of the centre pressure for t >= 0.7 tau
+    (2.5 %; the
     error near t0 is the time step's: 27 % at 0.3 tau with 20 steps, 1.1 % with 160)."""
     m = field_measures(cp.simulate(lee_radok_scene("zener100", 96, 20)), "zener100",
                        t_field=0.7)

@@ -83,7 +83,7 @@ def test_sub_steps_in_windows_match_the_whole_grid(problem, form):
     charged0 = pb.conv.charged
     windowed = _sub_steps(pb, window.solve_in_window)
     assert pb.conv.charged > charged0                   # the windows' pairs are counted
-    for a, b in zip(whole, windowed):
+    for a, b in zip(whole, windowed, strict=True):
         p0 = a.p.max()
         assert np.abs(a.p - b.p).max() <= 1e-8 * p0
         assert np.abs(a.q - b.q).max() <= 1e-7 * MU * p0

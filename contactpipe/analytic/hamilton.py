@@ -74,7 +74,7 @@ def _normal_part(X, Y, Z, nu):
     gh = Z * H / (G * G + H * H)
     s13 = -Z * X * (N / S - gh)
     s23 = -Z * Y * (N / S - gh)
-    return dict(zip(COMPONENTS, (s11, s22, s33, s12, s13, s23)))
+    return dict(zip(COMPONENTS, (s11, s22, s33, s12, s13, s23), strict=True))
 
 
 def _tangential_part(X, Y, Z, nu):
@@ -108,7 +108,7 @@ def _tangential_part(X, Y, Z, nu):
            + N / r2 * (-0.75 * (S + 2 * A) + z2 - 0.75 - r2 / 4 + z2 / 2 * hx))
     s23 = X * Y * Z / (2 * r4) * (M * (0.5 + (z2 / 2 - 1.5 - r2 / 2) / S)
                                   + Z * N / 2 * (-3 + (5 + z2 + r2) / S))
-    return dict(zip(COMPONENTS, (s11, s22, s33, s12, s13, s23)))
+    return dict(zip(COMPONENTS, (s11, s22, s33, s12, s13, s23), strict=True))
 
 
 def hertz_axis_stress(x3, contact_radius, max_pressure, poisson):

@@ -143,8 +143,8 @@ def masing_memory(history):
         The current force T [N] (``history[-1]``, 0 for an empty history).
     """
     rev, t = (), 0.0
-    for rev, t in _memory_states(history):
-        pass
+    for state in _memory_states(history):
+        rev, t = state                    # keep the last state
     return rev, t
 
 

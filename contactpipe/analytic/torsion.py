@@ -136,7 +136,7 @@ def lubkin_moment(twist, friction_coefficient, normal_force, contact_radius, com
             continue
         target = abs(b)
 
-        def gap(r):
+        def gap(r, target=target):
             return 0.5 * mu * compliance * _b(r * a, a, p0) - target
 
         lo = 1e-300                          # beta(c) grows like log(1/c) as c -> 0

@@ -98,7 +98,7 @@ def _read_or_locate(v, sl, name, tally):
         except Exception as e:             # noqa: BLE001 - any failure: unreadable
             reason = one_line(e)
             tally.add((name, "unreadable (checksum mismatch or corrupt chunk)"), k,
-                      [True], lambda _: reason)
+                      [True], lambda _, reason=reason: reason)
             return None
     return None
 

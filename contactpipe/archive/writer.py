@@ -528,8 +528,8 @@ def to_dataset(x1, x2, times, fields: dict, attrs: dict) -> xr.Dataset:
         The instants [s], strictly ascending.
     fields : dict of str -> array_like
         Variable name -> values, shaped (time, x1, x2), (time,) or (x1, x2) as the
-        nomenclature says. Floats stay float32 when given as float32, else become float64; ``status``
-        becomes int8 and counts int32.
+        nomenclature says. Floats stay float32 when given as float32, else become float64;
+        ``status`` becomes int8 and counts int32.
     attrs : dict
         Global attributes (``Conventions`` and ``contactpipe_version`` are filled in).
 

@@ -40,7 +40,7 @@ class ExponentialCreep:
     def __call__(self, t):
         t = np.asarray(t, dtype=float)
         out = self.a + self.b * t
-        for di, ti in zip(self.d, self.tau):
+        for di, ti in zip(self.d, self.tau, strict=True):
             out = out + di * np.exp(-t / ti)
         return out
 
@@ -59,7 +59,7 @@ class ExponentialCreep:
         t1 = np.asarray(t1, dtype=float)
         h = t1 - t0
         out = self.a + self.b * 0.5 * (t0 + t1)
-        for di, ti in zip(self.d, self.tau):
+        for di, ti in zip(self.d, self.tau, strict=True):
             out = out + di * ti * (np.exp(-t0 / ti) - np.exp(-t1 / ti)) / h
         return out
 
@@ -72,7 +72,7 @@ class ExponentialCreep:
         """phi'(t) [1/s] (the creep rate; phi'(0) at t = 0)."""
         t = np.asarray(t, dtype=float)
         out = np.full(t.shape, self.b)
-        for di, ti in zip(self.d, self.tau):
+        for di, ti in zip(self.d, self.tau, strict=True):
             out = out - di / ti * np.exp(-t / ti)
         return out
 
@@ -81,7 +81,7 @@ class ExponentialCreep:
         phi0 + b/s + sum_i c_i / (1 + s tau_i) with c_i = -d_i."""
         s = np.asarray(s, dtype=complex)
         out = self.phi0 + self.b / s
-        for di, ti in zip(self.d, self.tau):
+        for di, ti in zip(self.d, self.tau, strict=True):
             out = out - di / (1.0 + s * ti)
         return out
 
@@ -151,7 +151,7 @@ class TabulatedCreep:
         s = np.asarray(s, dtype=complex)
         tk, pk = np.asarray(self.t, dtype=float), np.asarray(self.phi, dtype=float)
         out = np.full(s.shape, pk[0], dtype=complex)
-        for t0, t1, slope in zip(tk[:-1], tk[1:], np.diff(pk) / np.diff(tk)):
+        for t0, t1, slope in zip(tk[:-1], tk[1:], np.diff(pk) / np.diff(tk), strict=True):
             out = out + slope * (np.expm1(-s * t0) - np.expm1(-s * t1)) / s
         return out
 
@@ -268,7 +268,7 @@ def combine(terms, name="combined") -> ExponentialCreep:
     for w, f in terms:
         a += w * f.a
         b += w * f.b
-        for di, ti in zip(f.d, f.tau):
+        for di, ti in zip(f.d, f.tau, strict=True):
             merged[ti] = merged.get(ti, 0.0) + w * di
     keep = [(ti, di) for ti, di in merged.items() if di != 0.0]
     out = ExponentialCreep(a=a, b=b, d=tuple(di for _, di in keep),
@@ -345,7 +345,7 @@ def relaxation_from_creep(creep: ExponentialCreep, extra: float = 0.0) -> Expone
         return (b / x ** 2 if b else 0.0) + float(np.sum(c * tau / (1.0 - x * tau) ** 2))
 
     edges = list(poles)
-    brackets = list(zip(edges[:-1], edges[1:]))
+    brackets = list(zip(edges[:-1], edges[1:], strict=True))
     if edges and a0 > 0:                         # psi -> a0 beyond the last pole
         brackets.append((edges[-1], np.inf))
     if b > 0 and (edges or a0 > 0):

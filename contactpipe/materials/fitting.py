@@ -178,7 +178,7 @@ def _fit_terms(basis, data, times, free, span):
     # would put a pole of the interconversion on top of a real one), terms that met
     # (within 0.1 %) made one at their mean log time
     terms = []
-    for ti, ci in sorted(zip(tk, coef[nf:])):
+    for ti, ci in sorted(zip(tk, coef[nf:], strict=True)):
         if not ci > 1e-7 * coef.max():
             continue
         if terms and ti < terms[-1][0] * (1.0 + 1e-3):
@@ -254,7 +254,7 @@ def compliance_error(t, modulus, fitted_modulus, creep, young, refine=8):
     pos = t[t > 0]
     refine = max(1, min(int(refine), 1200 // pos.size))    # N^2 work and memory
     grid = [np.linspace(0.0, pos[0], refine + 1)]
-    for lo, hi in zip(pos[:-1], pos[1:]):
+    for lo, hi in zip(pos[:-1], pos[1:], strict=True):
         grid.append(np.geomspace(lo, hi, refine + 1)[1:])
     grid = np.concatenate(grid)
     first = ratio[1] if t[0] == 0 else ratio[0]         # the ratio at pos[0]
@@ -406,7 +406,7 @@ def _creep_from_relaxation(e_inf, ek, tau):
         return np.sum(ek * tau / (1.0 - x * tau) ** 2)
 
     poles = np.sort(1.0 / tau)                  # x = 1/tau_i, ascending
-    edges = list(zip(poles[:-1], poles[1:]))
+    edges = list(zip(poles[:-1], poles[1:], strict=True))
     if e_inf > 0:
         edges.insert(0, (0.0, poles[0]))
     lam, dj = [], []

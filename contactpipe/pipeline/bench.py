@@ -259,7 +259,7 @@ def bench_memory(backend, threads, n=64, steps=1000):
                     grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
                     solver={"fft": backend, "threads": threads})
         stamps = []
-        simulate(sc, on_step=lambda k, t, rec: stamps.append(time.perf_counter()))
+        simulate(sc, on_step=lambda k, t, rec, out=stamps: out.append(time.perf_counter()))
         d = np.diff(stamps) * 1e3
         times = (d[1:11].mean(), d[-10:].mean())
         print(f"{creep['creep']:>8} {times[0]:>21.2f} {times[1]:>25.2f}")

@@ -47,10 +47,13 @@ __all__ = ["main", "build_parser"]
 STAGES = {
     # name: (module, one-line help)
     "sweep": ("contactpipe.pipeline.sweep", "run a parameter sweep on dask (resumable)"),
-    "compare": ("contactpipe.pipeline.compare_cli", "compare archives with closed forms or each other"),
+    "compare": ("contactpipe.pipeline.compare_cli",
+                "compare archives with closed forms or each other"),
     "plot": ("contactpipe.pipeline.plot", "figures of an archive, a stress file or a sweep folder"),
-    "pipeline": ("contactpipe.pipeline.run", "sweep -> compare -> plot (-> stress), idempotent, cron-safe"),
-    "bench": ("contactpipe.pipeline.bench", "print solver speed figures (FFT pairs, iterations, time)"),
+    "pipeline": ("contactpipe.pipeline.run",
+                 "sweep -> compare -> plot (-> stress), idempotent, cron-safe"),
+    "bench": ("contactpipe.pipeline.bench",
+              "print solver speed figures (FFT pairs, iterations, time)"),
     "stress": ("contactpipe.pipeline.stress_cmd",
                "subsurface stress field of an archive (DC-FFT per depth)"),
 }

@@ -254,7 +254,7 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None) -> xr.Dataset:
         same_time, same_grid = _alignment(out_dir, datasets)
         taken = set(dims.values())
         prepared = [(m, _prepared(ds, same_time, same_grid, taken))
-                    for m, ds in zip(done, datasets)]
+                    for m, ds in zip(done, datasets, strict=True)]
         label = _labeller(manifest, names)
         if manifest["mode"] == "zip":
             sw = _combine_zip(prepared, names, dims, label)

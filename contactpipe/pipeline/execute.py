@@ -19,8 +19,9 @@ Where the archives are written (``shared_disk``)
     --local-directory``; outside a worker, dask's ``temporary-directory`` or the system's
     temporary folder), and sends the archive's bytes back; the scratch folders that
     killed workers left there are removed by the next member simulated there (and dask
-    removes a dead worker's local directory when a new worker starts); the client checks them (a complete archive of the
-    member's own scene: :func:`land_member`) and writes them atomically into ``out_dir``.
+    removes a dead worker's local directory when a new worker starts); the client checks them
+    (a complete archive of the member's own scene: :func:`land_member`) and writes them atomically
+    into ``out_dir``.
     Workers are never told ``out_dir``. Each archive then travels through the scheduler's
     network and is held in memory once on the worker and once on the client: for archives
     of several GB, prefer a shared disk.

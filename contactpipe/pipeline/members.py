@@ -162,7 +162,7 @@ def _combinations(names, values, mode) -> list:
         if len(set(lengths.values())) > 1:
             raise SceneError("mode = 'zip' needs axes of equal lengths, got "
                              + ", ".join(f"{n}: {k}" for n, k in lengths.items()))
-        return list(zip(*(values[n] for n in names)))
+        return list(zip(*(values[n] for n in names), strict=True))
     problems = []
     for n in names:
         labels = [json.dumps(coord_value(v)) for v in values[n]]
@@ -234,7 +234,7 @@ def build_members(base, axes, mode):
     derived = [n for n in names if funcs[n] is not None]
     problems, members = [], []
     for i, combo in enumerate(combos):
-        vals = dict(zip(names, combo))
+        vals = dict(zip(names, combo, strict=True))
         scene, bad = _member_scene(base, vals, dotted, derived, funcs)
         if bad:
             problems.extend(p for p in bad if p not in problems)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from typing import Callable
+from collections.abc import Callable
 
 from ..exceptions import SceneError
 from ..fretting import closed_form_boundary

@@ -5,8 +5,9 @@
 file (written by ``contactpipe stress`` or the pipeline's ``[stress]`` product);
 ``contactpipe plot SWEEP_DIR/ -o FIG.png [--kind sweep] [--variable NAME]`` for a sweep
 folder, ``contactpipe plot SWEEP_DIR/ -o FIG.png --kind fretting-map [--against mu|W]`` for
-the fretting map of a displacement-controlled fretting sweep. Each kind of input takes its own kinds (:data:`INPUTS`); a kind that does not
-apply to the input is one line on stderr and exit status 2, nothing written.
+the fretting map of a displacement-controlled fretting sweep. Each kind of input takes its
+own kinds (:data:`INPUTS`); a kind that does not apply to the input is one line on stderr and exit
+status 2, nothing written.
 
 - :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
   instants, the closed form (black dashes) or a reference archive (black dots) drawn
@@ -366,7 +367,7 @@ def _profiles(ds, ks, sol, ref, fig):
     span = t_all[-1] - t_all[0]
     for n, k in enumerate(ks):
         c, label = f"C{n % 10}", _time_label(ds, k)
-        for ax, name in zip(panels, ("p", "q1")):
+        for ax, name in zip(panels, ("p", "q1"), strict=False):
             ax.plot(x1 / aH, _profile(ds[name], k, rows) / pH, "o-", ms=3, lw=1.2,
                     color=c, label=label)
         if sol is not None:
@@ -377,7 +378,7 @@ def _profiles(ds, ks, sol, ref, fig):
     grey_label = (f"closed form ({sol.name.replace('_', '-')})" if sol is not None else
                   "reference archive" if ref is not None else None)
     grey_style = CLOSED_STYLE if sol is not None else REFERENCE_STYLE
-    for ax, name in zip(panels, ("p", "q1")):
+    for ax, name in zip(panels, ("p", "q1"), strict=False):
         if grey_label:
             ax.plot([], [], **grey_style, label=grey_label)
         ax.set_ylabel(f"{name} / {pn}")
@@ -718,7 +719,7 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
             if extra else [()]
         xs_all = sw[xname] if xname in sw.variables else None
         for n, combo in enumerate(combos):
-            sel = dict(zip(extra, combo))
+            sel = dict(zip(extra, combo, strict=True))
             y = da.isel(sel) if sel else da
             xv = y[xname] if xs_all is None else \
                 xs_all.isel({d: i for d, i in sel.items() if d in xs_all.dims})

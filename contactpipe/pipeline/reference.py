@@ -429,7 +429,7 @@ class ClosedForm:
                                                           self.normal_force, a, c)
         head = self.displacement[:start + 1]
         fine = np.concatenate([np.linspace(x, y, per_step + 1)[1:]
-                               for x, y in zip(om[:-1], om[1:])])
+                               for x, y in zip(om[:-1], om[1:], strict=True)])
         T = analytic.displacement_loop_force(np.concatenate([head, fine]), self.mu,
                                              self.normal_force, a, c)
         path = np.concatenate([om[:1], fine])
@@ -455,7 +455,7 @@ class ClosedForm:
             return []
         rev, t = analytic.masing_memory(self.history(k))
         points = list(rev) + [t]
-        forces = [rev[0]] + [0.5 * (b - a) for a, b in zip(points, points[1:])] \
+        forces = [rev[0]] + [0.5 * (b - a) for a, b in zip(points, points[1:], strict=False)] \
             if rev else [t]
         mu_w = self.mu * self.normal_force
         a = self.hertz.contact_radius
@@ -583,7 +583,7 @@ class ClosedForm:
             return None
         hist = self._T[:self._idx[-1] + 1]
         fine = np.concatenate([hist[:1]] + [np.linspace(a, b, per_step + 1)[1:]
-                                            for a, b in zip(hist[:-1], hist[1:])])
+                                            for a, b in zip(hist[:-1], hist[1:], strict=True)])
         omega = analytic.tangential_displacement(fine, self.mu, self.normal_force,
                                                  self.hertz.contact_radius, self.compliance,
                                                  all_instants=True)

@@ -58,8 +58,9 @@ def fretting_map(sweep_dir) -> xr.Dataset:
     -------
     xarray.Dataset
         Over the dimension ``member`` (in sweep order): one coordinate per sweep axis
-        (``axis_<name>``, e.g. ``axis_friction.mu``, the member's value), the variables of :data:`COLUMNS`, ``regime`` and
-        ``regime_closed_form`` (strings; "" where no closed form applies) and ``file``.
+        (``axis_<name>``, e.g. ``axis_friction.mu``, the member's value), the variables of
+        :data:`COLUMNS`, ``regime`` and ``regime_closed_form`` (strings; "" where no closed form
+        applies) and ``file``.
         Attributes: ``sweep_axes`` (JSON), ``members_not_done``, and where every member
         shares them the boundary's constants ``radius_m``, ``composite_modulus_Pa``,
         ``compliance_sum_per_Pa``.

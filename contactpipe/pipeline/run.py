@@ -38,8 +38,9 @@ so never point a pipeline at a scheduler you do not control (the sweep's workers
 not share this machine's disk: :mod:`contactpipe.pipeline.execute`).
 
 ``out`` may also be given inside ``[sweep]``; it must be a folder (existing or to be
-created): a file, a device or the pipeline file itself is refused before any work. Members without a closed form are not
-compared when ``reference = "closed_form"`` (the summary says so); that is not a failure.
+created): a file, a device or the pipeline file itself is refused before any work. Members
+without a closed form are not compared when ``reference = "closed_form"`` (the summary says so);
+that is not a failure.
 
 Outputs, in ``out``
 -------------------
@@ -70,8 +71,8 @@ only when missing or older than its archive (or the reference archive); the swee
 when older than any member archive or when the set of members changed; a stress product
 when older than its archive or made with other ``[stress]`` settings (the digest of the
 settings is stored in the product and compared: a change of depths, body, instants,
-criterion, constants, cycle or precision recomputes it), its figure when older than it. Every product is
-written to a temporary name and renamed, so an interrupted run leaves no half file.
+criterion, constants, cycle or precision recomputes it), its figure when older than it. Every
+product is written to a temporary name and renamed, so an interrupted run leaves no half file.
 Figures are drawn by :mod:`contactpipe.pipeline.plot` and written by its
 :func:`~contactpipe.pipeline.plot.save_figure`.
 
@@ -84,7 +85,7 @@ a second run that finds it held exits at once with status 3 and one line on stde
 process, so a killed run never blocks the next one, and the next one resumes where it
 stopped. A crontab line (every 30 minutes, no progress bars, one log)::
 
-    */30 * * * *  cd /data/study && contactpipe pipeline paper-fig3.toml --no-progress >> pipeline.log 2>&1
+    */30 * * * * cd /data && contactpipe pipeline paper-fig3.toml --no-progress >> pipeline.log 2>&1
 
 Exit status: 0 all done; 1 a member (or one of its products) failed — the others are
 still completed, and the failures are listed; 2 a bad pipeline or sweep file or out

@@ -180,7 +180,7 @@ def _summary(path) -> str:
             flat = vm.data.argmax()                  # dask: read block by block
             flat = int(flat.compute() if hasattr(flat, "compute") else flat)
             k = np.unravel_index(flat, vm.shape)
-            at = {d: float(st[d].values[i]) for d, i in zip(vm.dims, k)}
+            at = {d: float(st[d].values[i]) for d, i in zip(vm.dims, k, strict=True)}
             peak = float(vm[tuple(int(i) for i in k)].values)
             return (f"{st.sizes['time']} instant(s) x {st.sizes['x3']} depth(s) on "
                     f"{st.sizes['x1']}x{st.sizes['x2']} cells, {st.attrs.get('body')}; "
@@ -210,7 +210,7 @@ def _peak(st) -> dict:
     vm = st["von_mises"]
     flat = vm.data.argmax()                          # dask: one block at a time
     k = np.unravel_index(int(flat.compute() if hasattr(flat, "compute") else flat), vm.shape)
-    at = {d: float(st[d].values[i]) for d, i in zip(vm.dims, k)}
+    at = {d: float(st[d].values[i]) for d, i in zip(vm.dims, k, strict=True)}
     return {"von_mises_max": float(vm[tuple(int(i) for i in k)].values),
             "von_mises_max_time": at["time"], "von_mises_max_x3": at["x3"],
             "von_mises_max_x1": at["x1"], "von_mises_max_x2": at["x2"]}
