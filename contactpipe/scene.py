@@ -191,6 +191,7 @@ def contact_shifts(geometry, load):
     if geometry.shape == "surface":
         return None
     t, W = load.knots()[:2]
+    out: list[tuple[float, str | None, float | None, float | None, float]]
     out = [(0.0, None, None, None, 0.0)] * 2
     if geometry.shape == "flat_punch":
         return tuple(out)
@@ -659,7 +660,7 @@ class Scene:
         given = dict(name=name, geometry=geometry, indenter=indenter, halfspace=halfspace,
                      friction=friction, load=load, grid=grid, time=time, solver=solver,
                      output=output, **unknown)
-        problems = []
+        problems: list[str] = []
         r = Reader(given, "", problems, title="the scene")
         r.check_keys(FIELDS)
         parts = r.read(FIELDS)
@@ -843,7 +844,10 @@ class Scene:
     def instants(self):
         """The load program on the scene's time mesh: (t [s], W, T1, T2 [N]) arrays of
         length ``time.steps`` + 1."""
-        return self.load.instants(self.time.steps)
+        steps = self.time.steps
+        if steps is None:                   # not after reading: a scene stores the number
+            steps = self.load.default_steps()
+        return self.load.instants(steps)
 
 
 def _file_digest(path) -> str:

@@ -316,32 +316,42 @@ class BodySpec(Part):
         other models); cached while the file is unchanged."""
         if self.creep != "fit":
             return None
-        return materials.fit_table_file(self.file, self.table_kind,
+        return materials.fit_table_file(self._given("file"), self._given("table_kind"),
                                         **fit_options(vars(self)))
+
+    def _given(self, name: str):
+        """Key ``name``, which :meth:`read` requires for this material and creep model."""
+        value = getattr(self, name)
+        if value is None:
+            raise SceneError(f"{self.PATH}.{name} is required for material = "
+                             f"{self.material!r}, creep = {self.creep!r}, and is not given")
+        return value
 
     def creep_function(self):
         """The normalised creep function phi(t) (:data:`materials.ELASTIC` if none)."""
         if self.material != "viscoelastic":
             return materials.ELASTIC
         if self.creep == "maxwell":
-            return materials.maxwell(self.relaxation_time)
+            return materials.maxwell(self._given("relaxation_time"))
         if self.creep == "kelvin_voigt":
-            return materials.kelvin_voigt(self.retardation_time)
+            return materials.kelvin_voigt(self._given("retardation_time"))
         if self.creep == "zener":
-            return materials.zener(self.young, self.relaxed_young, self.retardation_time)
+            return materials.zener(self._given("young"), self._given("relaxed_young"),
+                                   self._given("retardation_time"))
         if self.creep == "prony":
             return materials.prony(self.terms, self.relaxation_time)
         if self.creep == "fit":
             return self.fit().creep
-        t, phi = zip(*self.table)
+        t, phi = zip(*self._given("table"), strict=True)
         return materials.TabulatedCreep(t=tuple(t), phi=tuple(phi))
 
     def body(self) -> materials.Body:
         """The :class:`materials.Body` this spec describes."""
         if self.material == "rigid":
             return materials.Body(kind="rigid")
-        return materials.Body(kind=self.material, young=self.young, poisson=self.poisson,
-                              creep=self.creep_function(), bulk=self.bulk or "creep")
+        return materials.Body(kind=self.material, young=self._given("young"),
+                              poisson=self._given("poisson"), creep=self.creep_function(),
+                              bulk=self.bulk or "creep")
 
 
 # ----------------------------------------------------------------------------- friction

@@ -181,7 +181,7 @@ class Field:
     cap: float | None = None
     cap_why: str = ""
     check: Callable | None = None
-    part: type | None = None
+    part: type[Part] | None = None
     unit: str = ""
 
     @property
@@ -455,12 +455,18 @@ class Part:
     FIELDS: tuple = ()
 
     def __post_init__(self):
-        problems = []
+        problems: list[str] = []
         new = type(self).read(self.to_fields(), self.PATH, problems)
         if problems or new is None:
             raise SceneError(problems or [f"{self.PATH}: invalid"])
-        for f in dataclasses.fields(self):
+        for f in self._fields():
             object.__setattr__(self, f.name, getattr(new, f.name))
+
+    @classmethod
+    def _fields(cls) -> tuple[dataclasses.Field, ...]:
+        """The dataclass fields of the concrete part."""
+        # every concrete part is a @dataclass; Part itself is not, which mypy cannot see
+        return dataclasses.fields(cls)  # type: ignore[arg-type]
 
     @classmethod
     def field(cls, name: str) -> Field:
@@ -480,13 +486,13 @@ class Part:
     def make(cls, **values):
         """An instance from already validated values (no check)."""
         obj = object.__new__(cls)
-        for f in dataclasses.fields(cls):
+        for f in cls._fields():
             object.__setattr__(obj, f.name, values.get(f.name))
         return obj
 
     def to_fields(self) -> dict:
         """The fields as they are held (tuples, parts, None for absent)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        return {f.name: getattr(self, f.name) for f in self._fields()}
 
     def to_dict(self) -> dict:
         """The part as a plain dict (lists, floats, ints, str, bool) without its None
