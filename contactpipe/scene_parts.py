@@ -323,8 +323,9 @@ class BodySpec(Part):
         """Key ``name``, which :meth:`read` requires for this material and creep model."""
         value = getattr(self, name)
         if value is None:
+            model = f", creep = {self.creep!r}" if self.creep else ""
             raise SceneError(f"{self.PATH}.{name} is required for material = "
-                             f"{self.material!r}, creep = {self.creep!r}, and is not given")
+                             f"{self.material!r}{model}, and is not given")
         return value
 
     def creep_function(self):

@@ -504,3 +504,21 @@ def test_deep_name_through_the_console_is_one_line(tmp_path):
                        timeout=120)
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr[-2000:]
     assert "nested too deep" in r.stderr and not (tmp_path / "x.nc").exists()
+
+
+@pytest.mark.parametrize("fields, call, key", [
+    (dict(material="viscoelastic", creep="maxwell", young=1e9, poisson=0.3),
+     "creep_function", "body.relaxation_time is required for material = 'viscoelastic', "
+                       "creep = 'maxwell'"),
+    (dict(material="viscoelastic", creep="zener", young=3e9, poisson=0.3,
+          retardation_time=1.0), "creep_function", "body.relaxed_young is required"),
+    (dict(material="elastic", poisson=0.3), "body",
+     "body.young is required for material = 'elastic', and is not given"),
+])
+def test_a_body_built_without_a_required_key_names_it(fields, call, key):
+    """A body spec made without validation (BodySpec.make) and missing a key its model
+    needs: a SceneError naming the key, not a TypeError deep in materials (maxwell) or a
+    Body whose young modulus is None (elastic), as before."""
+    spec = BodySpec.make(**fields)
+    with pytest.raises(SceneError, match=re.escape(key)):
+        getattr(spec, call)()
