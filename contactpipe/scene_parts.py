@@ -319,8 +319,7 @@ class BodySpec(Part):
         return materials.fit_table_file(self._given("file"), self._given("table_kind"),
                                         **fit_options(vars(self)))
 
-    def _given(self, name: str):
-        """Key ``name``, which :meth:`read` requires for this material and creep model."""
+    def _given(self, name: str):        # a key read() requires for this material and model
         value = getattr(self, name)
         if value is None:
             model = f", creep = {self.creep!r}" if self.creep else ""

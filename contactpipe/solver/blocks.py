@@ -71,7 +71,7 @@ class BlockOperator:
         tmp = self._tmp
         for i, row in enumerate(self.khat):
             have = False
-            for k, s in zip(row, xhat):
+            for k, s in zip(row, xhat, strict=True):
                 if k is None or s is None:
                     continue
                 if not have:
@@ -90,7 +90,7 @@ class BlockOperator:
         :meth:`product` (xhat), xᵀ A x."""
         total = 0.0
         last = self.conv.m2 // 2
-        for s, r in zip(xhat, rhat):
+        for s, r in zip(xhat, rhat, strict=True):
             if s is None:
                 continue
             total += 2.0 * _real_dot(s, r) - _real_dot(s[:, 0], r[:, 0]) \

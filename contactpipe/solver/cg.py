@@ -41,7 +41,7 @@ bound-constrained QP and no multiplier is fitted.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -51,9 +51,10 @@ from .projection import (DAMPING, POLISH, _polish, _project_cells, _restore_by_s
                          project_box_sum, project_rows)
 from .ledger import Ledger, Move, dot as _dot
 
-__all__ = ["BlockSums", "BoxOptions", "BoxResult", "Outcome", "Start", "ComponentSums", "Constraints", "box_cg",
-           "cg_with_fallback", "feasible_start", "fista", "project_box_sum", "project_rows",
-           "box_jacobian", "box_project", "disk_jacobian", "disk_project"]
+__all__ = ["BlockSums", "BoxOptions", "BoxResult", "Outcome", "Start", "ComponentSums",
+           "Constraints", "box_cg", "cg_with_fallback", "feasible_start", "fista",
+           "project_box_sum", "project_rows", "box_jacobian", "box_project", "disk_jacobian",
+           "disk_project"]
 
 
 @dataclass
@@ -96,7 +97,7 @@ class Constraints:
             raise ValueError(f"{self.m} rows need {self.m} targets, got {self.target.shape}")
 
     @classmethod
-    def none(cls, shape) -> "Constraints":
+    def none(cls, shape) -> Constraints:
         """No row: displacement control (a plain bound-constrained problem)."""
         return cls(np.zeros((0,) + tuple(shape)), np.zeros(0))
 

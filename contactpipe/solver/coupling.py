@@ -114,7 +114,7 @@ class Controls:
     x2: np.ndarray | None = None
 
     @classmethod
-    def forces(cls, W, T) -> "Controls":
+    def forces(cls, W, T) -> Controls:
         """W and T force-controlled, the three rotations held at zero."""
         T = np.asarray(T, dtype=float)
         nan = np.nan

@@ -58,7 +58,7 @@ pass's start, the instant's final state) ride on the last step the same way.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -66,8 +66,8 @@ from .cg import BlockSums, disk_project, project_rows
 from .ledger import Ledger, Move
 from .options import TUNING, Tuning
 
-__all__ = ["DiskOptions", "DiskResult", "PressureBlock", "curvature", "curved", "direction", "disk_cg",
-           "disk_start", "magnitude", "restore_rows", "shortened", "slip_axes"]
+__all__ = ["DiskOptions", "DiskResult", "PressureBlock", "curvature", "curved", "direction",
+           "disk_cg", "disk_start", "magnitude", "restore_rows", "shortened", "slip_axes"]
 
 @dataclass
 class DiskResult:
@@ -471,7 +471,7 @@ def disk_cg(A, b, start, rho, con, options: DiskOptions, ledger: Ledger | None =
             err = 0.0 if rz <= 0.0 else np.inf
             break
         reset = (res.entered or sets_old is None
-                 or not all(np.array_equal(a, c) for a, c in zip(res.sets, sets_old)))
+                 or not all(np.array_equal(a, c) for a, c in zip(res.sets, sets_old, strict=True)))
         t = res.z if reset else _conjugate(t, res.z, rz, rz_old, res.gr, res.qhat, turning)
         rz_old, sets_old = rz, res.sets
         tAt = book.curvature(t)[1]

@@ -97,7 +97,7 @@ class Ledger:
         self.update, self.defer, self.follow, self.exact = update, defer, follow, exact
         self.apply = None
 
-    def bind(self, apply, tol) -> "Ledger":
+    def bind(self, apply, tol) -> Ledger:
         """Ready for one solve of ``apply`` at tolerance ``tol``."""
         self.apply = apply
         self.halves = self.update and hasattr(apply, "spectra")

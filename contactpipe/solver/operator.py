@@ -108,7 +108,8 @@ def weighted_spectra(parts, weights):
         return None, 0.0
     if len(parts) == 1:
         return parts[0], w[0]
-    total = BodySpectra.on({key: sum(wj * part[key] for wj, part in zip(w, parts) if wj != 0.0)
+    total = BodySpectra.on({key: sum(wj * part[key] for wj, part in zip(w, parts, strict=True)
+                                      if wj != 0.0)
                             for key in parts[0]}, parts[0].cell)
     return total, 1.0
 
@@ -513,7 +514,7 @@ def history_displacement(kernels, h1, h2, conv: Convolver, outputs=(1, 2, 3)):
         number of parts.
     """
     out = np.zeros((len(outputs), conv.n1, conv.n2))
-    for k, h in zip(kernels, (h1, h2)):
+    for k, h in zip(kernels, (h1, h2), strict=True):
         if k is None or h is None:
             continue
         parts = k if isinstance(k, list) else [k]

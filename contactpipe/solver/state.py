@@ -66,7 +66,7 @@ class State:
             self.dp = np.zeros_like(self.p)
 
     @classmethod
-    def initial(cls, shape, memories) -> "State":
+    def initial(cls, shape, memories) -> State:
         """The unloaded state on a grid of ``shape`` cells."""
         n1, n2 = shape
         return cls(np.zeros((n1, n2)), np.zeros((2, n1, n2)), np.zeros((3, n1, n2)),

@@ -68,8 +68,9 @@ def solve_in_window(op, gap, U, W, T, cell_area, mu, plan, previous: Previous,
         every cell, ``normal`` the normal solution with its K33 p of the whole grid.
     """
     n1, n2 = gap.shape
-    whole = (lambda: solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits,
-                                   controls=controls))
+    def whole():
+        return solve_instant(op, gap, U, W, T, cell_area, mu, plan, previous, limits,
+                             controls=controls)
     if op.rigid or min(n1, n2) < SMALLEST_GRID:
         return whole()
     support = _support(previous)
