@@ -19,7 +19,7 @@ import pytest
 
 import contactpipe as cp
 from contactpipe import simulation
-from contactpipe.accuracy import choose_preload, preload_error, preload_fractions
+from contactpipe.planning.accuracy import choose_preload, preload_error, preload_fractions
 
 R, W, E, NU, MU = 0.018, 1000.0, 105e9, 0.3, 0.1
 

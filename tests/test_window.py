@@ -12,7 +12,7 @@ import pytest
 import contactpipe as cp
 from contactpipe import simulation
 from contactpipe.planning import plan as make_plan
-from contactpipe.simulation import State, _Problem
+from contactpipe.simulation.march import State, _Problem
 from contactpipe.solver import window
 from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
 from contactpipe.solver.warm_start import self_similar_start

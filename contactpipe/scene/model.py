@@ -1,7 +1,7 @@
 """The scene: one simulation, frozen and validated on construction, TOML in and out.
 
 A :class:`Scene` holds the parts of a scene file as frozen dataclasses
-(:mod:`contactpipe.scene_parts`): :class:`Geometry`, two :class:`BodySpec` (``indenter`` =
+(:mod:`contactpipe.scene.parts`): :class:`Geometry`, two :class:`BodySpec` (``indenter`` =
 body 1, ``halfspace`` = body 2), :class:`Friction`, :class:`Load` (with an optional
 :class:`Fretting` preset), :class:`Grid`, :class:`TimeMesh`, :class:`Solver` and
 :class:`Output`. The file format is documented in ``docs/scene-file.md``.
@@ -16,7 +16,7 @@ and what is allowed::
     scene.digest()                             # 16 hex chars identifying the simulation
     scene.replace({"friction.mu": 0.2, "load.fretting.window": 2.0})
 
-Each table is read by the table-driven reader of :mod:`contactpipe.tables`; this module
+Each table is read by the table-driven reader of :mod:`contactpipe.scene.tables`; this module
 adds the rules across parts: two rigid bodies, the step-start rule without instantaneous
 elasticity or at or above its stability bound, gross sliding, the default time mesh (the
 least uniform mesh that holds every load knot), a creep table (or the data of a fitted one)
@@ -41,10 +41,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import friction_map, geometry as _geometry
-from . import materials
-from .exceptions import SceneError
-from .files import loads_toml
-from .scene_parts import (MAX_STEPS, MATERIALS, SHAPES, BodySpec, Fretting, Friction,
+from .. import materials
+from ..exceptions import SceneError
+from .._util.files import loads_toml
+from .parts import (MAX_STEPS, MATERIALS, SHAPES, BodySpec, Fretting, Friction,
                           Geometry, Grid, Load, Output, Solver, TimeMesh)
 from .tables import Field, Reader, show
 

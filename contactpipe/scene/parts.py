@@ -1,8 +1,8 @@
 """The parts of a scene: one frozen dataclass per table of the scene file.
 
 Each part describes its table as data (``FIELDS``, a tuple of
-:class:`~contactpipe.tables.Field`: name, kind, what is allowed, default, unit) and is
-read by the one loop of :class:`~contactpipe.tables.Reader`. The rules that tie keys
+:class:`~contactpipe.scene.tables.Field`: name, kind, what is allowed, default, unit) and is
+read by the one loop of :class:`~contactpipe.scene.tables.Reader`. The rules that tie keys
 together are plain functions next to their part: a shape's keys (:class:`Geometry`), a
 material's and a creep model's keys (:class:`BodySpec`), the lengths of a load program
 (:class:`Load`). Rules across parts (gross sliding, the default time mesh, the automatic
@@ -22,11 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import geometry as _geometry
-from . import friction_map, materials
-from .exceptions import SceneError
+from . import friction_map
+from .. import materials
+from ..exceptions import SceneError
 from .loading import (MAX_STEPS, ROWS, Programs, knot_steps, per_knot, program_field,
                       read_program)
-from .scene_fit import fit_options, fitted_young
+from .fit import fit_options, fitted_young
 from .tables import Field, Part, Reader, is_sequence, show
 
 __all__ = ["Part", "Geometry", "BodySpec", "Friction", "Fretting", "Load", "Grid",
@@ -354,7 +355,7 @@ class Friction(Part):
     ----------
     mu : float or str
         Friction coefficient [1], >= 0; 0 (the default) is frictionless. Or the path of
-        a netCDF file with a variable ``mu`` over x1, x2 [m] (:mod:`contactpipe.friction_map`),
+        a netCDF file with a variable ``mu`` over x1, x2 [m] (:mod:`contactpipe.scene.friction_map`),
         stored as an absolute path (relative to the scene file in ``Scene.from_toml``).
     """
 
@@ -473,7 +474,7 @@ _NORMAL_WHAT = ("a force >= 0 [N] (a step at time[0]) or a list with one force >
 
 @dataclass(frozen=True)
 class Load(Part):
-    """The load program, piecewise linear through knots (:mod:`contactpipe.loading`).
+    """The load program, piecewise linear through knots (:mod:`contactpipe.scene.loading`).
 
     Each of the six rigid-body freedoms of body 1 relative to body 2 is force-controlled
     or displacement-controlled (at most one key per row of :data:`loading.ROWS`): a
@@ -633,7 +634,7 @@ class Load(Part):
         return t, W, T1, T2
 
     def programs(self, steps: int | None = None) -> Programs:
-        """The six programs (:class:`contactpipe.loading.Programs`): at the knots, or on
+        """The six programs (:class:`contactpipe.scene.loading.Programs`): at the knots, or on
         the uniform mesh of ``steps`` + 1 instants from time[0] to time[-1]."""
         t, W, T1, T2 = self.knots()
         nan = np.full(t.shape, np.nan)
@@ -825,7 +826,7 @@ class Solver(Part):
         FFT threads, from 1 to 1024.
     accuracy : {None, "fast", "balanced", "accurate"}
         Ask for an accuracy preset: the grid points and time steps are then chosen by
-        :func:`contactpipe.accuracy.resolve_accuracy` (replacing ``grid.points`` and
+        :func:`contactpipe.planning.accuracy.resolve_accuracy` (replacing ``grid.points`` and
         ``time.steps``) and the choice is recorded in the archive.
     max_hours : float, optional
         The run time a run may be estimated to take [h], > 0; absent: 1 h

@@ -18,7 +18,7 @@ instantaneous (glassy) response; with ``"frictionless"`` the first instant is th
 initial frictionless normal solve (outer loop, step 1).
 
 Before anything is allocated, :func:`simulate` checks the output path
-(:func:`contactpipe.files.check_output_path`) and the memory the run needs
+(:func:`contactpipe._util.files.check_output_path`) and the memory the run needs
 (:func:`contactpipe.planning.estimate_resources`). A resumable run holds a lock on its
 target's resume state (:func:`contactpipe.archive.resume_lock`) and checkpoints beside the
 archive writers (:class:`contactpipe.archive.Checkpoint`).
@@ -31,22 +31,22 @@ from dataclasses import replace
 
 import numpy as np
 
-from .accuracy import (PRELOAD_TARGET, PRESETS, choose_preload, knot_multiple,
+from ..planning.accuracy import (PRELOAD_TARGET, PRESETS, choose_preload, knot_multiple,
                        preload_fractions, resolve_accuracy)
-from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
-from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
+from ..archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
+from ..exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
                          OutputPathError, ResumeNotice, SceneError, one_line)
-from .files import LockedError, check_output_path, exclusive_lock, make_folder
-from .interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
-from .materials import FIT_TOLERANCE, dundurs_beta
-from .nomenclature import variables_for
-from .planning import check_resources, estimate_resources, plan as make_plan
-from .solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
-from .solver.warm_start import continued_start, self_similar_start
-from .solver.window import solve_in_window
-from .solver.memory import BodyMemory, make_memory, resolve_body_rule
-from .solver.state import State
-from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
+from .._util.files import LockedError, check_output_path, exclusive_lock, make_folder
+from .._util.interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
+from ..materials import FIT_TOLERANCE, dundurs_beta
+from ..nomenclature import variables_for
+from ..planning import check_resources, estimate_resources, plan as make_plan
+from ..solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
+from ..solver.warm_start import continued_start, self_similar_start
+from ..solver.window import solve_in_window
+from ..solver.memory import BodyMemory, make_memory, resolve_body_rule
+from ..solver.state import State
+from ..solver.operator import (ContactOperator, body_spectra_parts, convolver,
                               history_displacement, history_kernels)
 
 __all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
@@ -258,7 +258,7 @@ class _Problem:
 
     def preload(self) -> dict:
         """The frictional preload's sub-step count and its estimated error (cached;
-        :func:`contactpipe.accuracy.choose_preload`). The preload path at t0 starts from
+        :func:`contactpipe.planning.accuracy.choose_preload`). The preload path at t0 starts from
         the unloaded state without history, so it is known before the march: coarser
         paths run on a scratch state (:meth:`_preload_path`).
 
@@ -749,7 +749,7 @@ def _progress(scene, total, initial):
 def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds, wall0):
     """Every instant from the start state to the end; the archive (or Dataset).
 
-    A signal is acted on between two instants (:func:`contactpipe.interrupts.deferred`),
+    A signal is acted on between two instants (:func:`contactpipe._util.interrupts.deferred`),
     where the state is whole: a resumable run checkpoints the instant it reached, then
     stops; and just before the archive is renamed into place (nothing is published).
     """
