@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe import simulation
+from contactpipe.simulation import march as simulation
 from contactpipe.solver import coupling, joint, tangential
 from contactpipe.solver.cg import BlockSums, box_cg
 from contactpipe.solver.coupling import Previous, follow_bound
