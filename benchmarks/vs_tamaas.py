@@ -39,7 +39,7 @@ import time
 import numpy as np
 
 from contactpipe.analytic import hertz_sphere
-from contactpipe.geometry import sphere_gap
+from contactpipe.scene.geometry import sphere_gap
 from contactpipe.materials import Body
 from contactpipe.solver.normal import solve_normal
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver

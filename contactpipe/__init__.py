@@ -28,8 +28,8 @@ from .exceptions import (ArchiveError, ContactpipeError, ConvergenceError, GridE
 #: so that the command line refuses a bad scene in a fraction of a second.
 _LAZY = {
     "Scene": "scene", "Plan": "planning", "plan": "planning", "simulate": "simulation",
-    "open_archive": "archive", "save": "archive", "subsurface_stress": "stress",
-    "fatigue": "fatigue", "compare": "pipeline.compare", "open_sweep": "pipeline.sweep",
+    "open_archive": "archive", "save": "archive", "subsurface_stress": "post.stress",
+    "fatigue": "post.fatigue", "compare": "pipeline.compare", "open_sweep": "pipeline.sweep",
     "sweep": "pipeline.sweep",
 }
 
@@ -45,7 +45,7 @@ def __getattr__(name):
     if module is not None:
         value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
     else:
-        try:                             # a subpackage or module: cp.analytic, cp.accuracy
+        try:                             # a subpackage or module: cp.analytic, cp.post
             value = importlib.import_module(f"{__name__}.{name}")
         except ModuleNotFoundError as err:
             if err.name != f"{__name__}.{name}":

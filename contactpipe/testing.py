@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import analytic
-from .loading import FREEDOMS
+from .scene.loading import FREEDOMS
 from .materials import kelvin_voigt, maxwell, prony, zener
 from .scene import Scene
 

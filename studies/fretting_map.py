@@ -6,7 +6,7 @@ displacement-controlled fretting cycle 0 -> +delta* -> -delta* -> +delta*
 delta* (the derived parameter ``delta_amplitude``) against ``friction.mu`` (default) or
 ``load.normal_force`` (``--against W``); each member's loop is classified by Fouvry's
 energy ratio A = E/(4 T* delta*) (partial slip A < 0.2, gross slip A >= 0.2, mixed when
-its cycles differ: contactpipe.fretting) and set against the closed form: the boundary
+its cycles differ: contactpipe.post.fretting) and set against the closed form: the boundary
 delta_gs = 3 mu W C/(16 a) of Mindlin's sphere and the Mindlin-Deresiewicz A(delta*/delta_gs).
 
     python studies/fretting_map.py [--out DIR] [--quick] [--against mu|W] [--points N]

@@ -49,7 +49,7 @@ figure of docs/figures/) and prints the tables. ``--quick``: small grids, few st
 laws and three rules in parts 3-4, one law in part 5, 16^2 in part 6 (a smoke run of
 seconds). The candidates that are not
 rules of the package are memories built here and handed to ``cp.simulate`` by replacing
-``contactpipe.simulation.make_memory`` for the run (:func:`use_memory`).
+``contactpipe.simulation.problem.make_memory`` for the run (:func:`use_memory`).
 """
 from __future__ import annotations
 
@@ -66,7 +66,7 @@ import numpy as np
 import matplotlib.pyplot as plt
 
 import contactpipe as cp
-import contactpipe.simulation as simulation_module
+import contactpipe.simulation.problem as simulation_module
 from contactpipe import analytic as an
 from contactpipe.materials import step_start_stable_step
 from contactpipe.solver import memory as mem
@@ -113,7 +113,7 @@ def candidate_memory(name):
 
 @contextlib.contextmanager
 def use_memory(name):
-    """cp.simulate with a candidate's memory (``contactpipe.simulation.make_memory``)."""
+    """cp.simulate with a candidate's memory (``contactpipe.simulation.problem.make_memory``)."""
     original = simulation_module.make_memory
     simulation_module.make_memory = candidate_memory(name)
     try:
@@ -377,7 +377,7 @@ def poisson_rows(quick):
 @contextlib.contextmanager
 def uniform_preload():
     """cp.simulate with the former uniform preload fractions k/n (replacing
-    ``contactpipe.simulation.preload_fractions`` for the run)."""
+    ``contactpipe.simulation.problem.preload_fractions`` for the run)."""
     original = simulation_module.preload_fractions
     simulation_module.preload_fractions = lambda n: np.arange(1, int(n) + 1) / float(n)
     try:

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe.accuracy import PRESETS, resolve_accuracy
+from contactpipe.planning.accuracy import PRESETS, resolve_accuracy
 
 from helpers import fretting_scene
 

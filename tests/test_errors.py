@@ -420,7 +420,7 @@ def test_toml_nested_5000_deep_is_one_line(tmp_path):
     p.write_text(text)
     with pytest.raises(SceneError, match=r"deep\.toml is not valid TOML: arrays or tables"):
         Scene.from_toml(p)
-    from contactpipe.files import read_toml
+    from contactpipe._util.files import read_toml
     with pytest.raises(SceneError, match=r"deep\.toml is not a valid TOML sweep file: arrays"):
         read_toml(p, "sweep")
 

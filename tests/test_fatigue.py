@@ -1,4 +1,4 @@
-"""Tests of contactpipe.fatigue: multiaxial fatigue criteria over a cycle.
+"""Tests of contactpipe.post.fatigue: multiaxial fatigue criteria over a cycle.
 
 Each criterion is checked on histories done by hand (sinusoidal uniaxial and torsional
 stress at a point, with and without a mean), the minimum circumscribed ball against an
@@ -13,7 +13,7 @@ import xarray as xr
 from scipy.optimize import minimize
 
 import contactpipe as cp
-from contactpipe.fatigue import (CRITERIA, deviatoric_coordinates, longest_chord, min_ball,
+from contactpipe.post.fatigue import (CRITERIA, deviatoric_coordinates, longest_chord, min_ball,
                                  plane_normals)
 
 COMPONENTS = ("s11", "s22", "s33", "s12", "s13", "s23")
@@ -227,7 +227,7 @@ def test_bad_constants(criterion, kwargs, match):
 def test_the_smallest_plane_step_counts_its_planes():
     """The refusal's plane count is the grid's: 20 629 normals at 1 degree (within 0.2 %
     of the 20 600 said), 206 at the default 10."""
-    from contactpipe.fatigue import MIN_PLANE_STEP, plane_normals
+    from contactpipe.post.fatigue import MIN_PLANE_STEP, plane_normals
     assert MIN_PLANE_STEP == 1.0
     assert len(plane_normals(1.0)[0]) == 20629
     assert len(plane_normals(10.0)[0]) == 206

@@ -1,5 +1,5 @@
 """Fretting maps (issue 10 item 6): the closed-form boundary and energy ratio, the
-classification of a loop by Fouvry's energy ratio (contactpipe.fretting), the derived
+classification of a loop by Fouvry's energy ratio (contactpipe.post.fretting), the derived
 sweep parameters delta_amplitude / delta_ratio, the regime table of a sweep and the
 ``fretting-map`` plot kind.
 
@@ -13,7 +13,7 @@ import pytest
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.exceptions import ArchiveError, SceneError
-from contactpipe.fretting import classify_loop, fretting_regime, loop_cycles, turning_points
+from contactpipe.post.fretting import classify_loop, fretting_regime, loop_cycles, turning_points
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.pipeline.parameters import delta_amplitude, delta_ratio
 from contactpipe.pipeline.plot_fretting import plot_energy_ratio, plot_fretting_map

@@ -303,7 +303,7 @@ def test_old_scenes_keep_their_digest():
 
 
 def _programs(tangential, normal=None):
-    from contactpipe.loading import Programs
+    from contactpipe.scene.loading import Programs
     n = len(tangential)
     force = np.full((6, n), np.nan)
     motion = np.full((6, n), np.nan)

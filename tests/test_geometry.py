@@ -1,4 +1,4 @@
-"""Gap builders of contactpipe.geometry and Geometry.gap."""
+"""Gap builders of contactpipe.scene.geometry and Geometry.gap."""
 import numpy as np
 import pytest
 import xarray as xr

@@ -8,7 +8,7 @@ and FFT pairs are benchmark figures (benchmarks/vs_tamaas.py), not asserted here
 import numpy as np
 import pytest
 
-from contactpipe.geometry import ellipsoid_gap, sphere_gap
+from contactpipe.scene.geometry import ellipsoid_gap, sphere_gap
 from contactpipe.materials import Body
 from contactpipe.solver.normal import NormalControl, prolong, restrict, solve_normal
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver

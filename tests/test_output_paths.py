@@ -13,7 +13,7 @@ import pytest
 
 import contactpipe as cp
 from contactpipe.exceptions import OutputPathError
-from contactpipe.files import check_output_dir
+from contactpipe._util.files import check_output_dir
 from contactpipe.pipeline import cli
 from contactpipe.pipeline.plot import save_figure
 from contactpipe.pipeline.sweep import sweep

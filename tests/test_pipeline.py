@@ -15,7 +15,7 @@ import contactpipe as cp
 from contactpipe.pipeline import cli
 from contactpipe.pipeline.config import read_pipeline_file
 from contactpipe.pipeline.run import PipelineLockedError, run_pipeline
-from contactpipe.stress import open_stress
+from contactpipe.post.stress import open_stress
 from contactpipe.testing import TINY_SCENES
 
 CREEP = TINY_SCENES["creep"]

@@ -7,7 +7,7 @@ incompressible (or rigid) bodies, and for a rigid body on an incompressible one.
 import pytest
 
 import contactpipe as cp
-from contactpipe.planning import RULES, pair_couples
+from contactpipe.planning import RULES, Rule, models, pair_couples
 
 from helpers import MU, STEEL, W, fretting_scene, make_scene
 
@@ -217,11 +217,28 @@ def test_bad_tangential_name_on_a_scene_without_shear():
 
 
 def test_rules_table_lists_every_slot_and_model():
-    assert RULES == {"normal": ("polonsky_keer",), "tangential": ("none", "scalar", "vector"),
-                     "coupling": ("none", "gauss_seidel"),
-                     "memory": ("none", "recursive", "direct")}
-    for slot, models in RULES.items():
-        assert getattr(cp.plan(scene()), slot) in models
+    assert {slot: models(slot) for slot in RULES} == {
+        "normal": ("polonsky_keer",), "tangential": ("none", "scalar", "vector"),
+        "coupling": ("none", "gauss_seidel"), "memory": ("none", "recursive", "direct")}
+    for slot in RULES:
+        assert getattr(cp.plan(scene()), slot) in models(slot)
+
+
+def test_each_rule_states_when_it_applies_what_it_requires_and_excludes():
+    """The table is the inference: every rule is a :class:`Rule` with a predicate; a
+    slot's last rule always applies (a plan names every slot); an override is refused by
+    the message of the rule's own condition."""
+    for slot, rules in RULES.items():
+        assert all(isinstance(r, Rule) and callable(r.applies) for r in rules), slot
+        for r in rules:
+            assert all(callable(c) and callable(m) for c, m in r.requires + r.excludes)
+    scalar = next(r for r in RULES["tangential"] if r.model == "scalar")
+    assert len(scalar.excludes) == 2                   # a twist, a load along x2
+    # steel on steel under T along x1: shear, identical bodies (beta = 0) -> no coupling
+    pl = cp.plan(scene())
+    assert (pl.tangential, pl.coupling) == ("scalar", "none")
+    with pytest.raises(cp.SceneError, match="coupling='gauss_seidel': nothing to couple"):
+        cp.plan(scene(), coupling="gauss_seidel")
 
 
 @pytest.mark.parametrize("value", ["none", "cattaneo"])

@@ -12,7 +12,7 @@ from contactpipe.pipeline import plot
 from contactpipe.pipeline.inputs import centre_rows
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.exceptions import ArchiveError
-from contactpipe.stress import save_stress
+from contactpipe.post.stress import save_stress
 
 from helpers import fretting_scene
 

@@ -18,8 +18,9 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe import simulation
-from contactpipe.accuracy import choose_preload, preload_error, preload_fractions
+from contactpipe.simulation import preload as simulation
+from contactpipe.planning.accuracy import (choose_preload, preload_error, preload_fractions,
+                                          resolve_accuracy)
 
 R, W, E, NU, MU = 0.018, 1000.0, 105e9, 0.3, 0.1
 
@@ -89,7 +90,7 @@ def test_auto_meets_the_target(reference):
 
 def test_accuracy_preset_sets_auto():
     """An accuracy preset replaces the count by "auto" with its own target."""
-    sc, _ = cp.accuracy.resolve_accuracy(scene(8, accuracy="fast"))
+    sc, _ = resolve_accuracy(scene(8, accuracy="fast"))
     assert sc.solver.preload_substeps == "auto"
 
 

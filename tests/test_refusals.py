@@ -127,7 +127,7 @@ def test_stress_refuses_an_archive_with_negative_pressure(work, tmp_path, capsys
 
 
 def _stress_file(work, path, compress=True):
-    from contactpipe.stress import save_stress
+    from contactpipe.post.stress import save_stress
     with cp.open_archive(work / "run.nc") as ds:
         save_stress(cp.subsurface_stress(ds, [0.0, 1e-4], chunks=False), path,
                     compress=compress)
@@ -158,7 +158,7 @@ def test_no_nan_is_written_or_returned(work, tmp_path):
     """save_stress refuses a stress holding NaN (nothing at the target); fatigue refuses
     limits that overflow its indices (1e-300 and 1e308 Pa gave NaN Crossland fields);
     the pipeline file refuses such limits before any work."""
-    from contactpipe.stress import save_stress
+    from contactpipe.post.stress import save_stress
     from contactpipe.pipeline.config import StressSpec
     from contactpipe.pipeline.stress_cmd import write_stress_product
     with pytest.raises(ValueError, match=r"x3 = 1e\+300 m is too deep: depths must be from 0 "
@@ -282,7 +282,7 @@ def test_friction_map_units(work, tmp_path):
     """A map whose coordinates say mm, um or µm gives the metre map's mu exactly (a
     linear mu over x1, interpolated onto the 24 x 24 grid); units of no length (ft,
     s) are refused naming the coordinate."""
-    from contactpipe.friction_map import check_mu_file, mu_on_grid
+    from contactpipe.scene.friction_map import check_mu_file, mu_on_grid
     x = np.linspace(-1.5e-3, 1.5e-3, 7)
     mu = 0.1 + 0.05 * x[:, None] / 1.5e-3 + 0 * x[None, :]
     grid = np.linspace(-1e-3, 1e-3, 24)
@@ -357,7 +357,7 @@ def test_the_validation_path_imports_no_heavy_library(tmp_path):
 def test_public_names_load_on_first_use():
     """Every name of contactpipe.__all__ resolves; cp.fatigue stays the function when
     the module of that name is imported."""
-    import contactpipe.fatigue  # noqa: F401 - binds the submodule's name on the package
+    import contactpipe.post.fatigue  # noqa: F401 - binds the submodule's name on the package
     assert callable(cp.fatigue) and cp.fatigue.__name__ == "fatigue"
     for name in cp.__all__:
         assert getattr(cp, name) is not None, name

@@ -6,9 +6,9 @@ import time
 import pytest
 
 import contactpipe as cp
-import contactpipe.simulation as simulation
+import contactpipe.simulation.march as simulation
 from contactpipe.pipeline.cli import main as cli_main
-from contactpipe.planning import (DEFAULT_MAX_HOURS, PAIR_COST_S, TYPICAL_PAIRS,
+from contactpipe.planning.resources import (DEFAULT_MAX_HOURS, PAIR_COST_S, TYPICAL_PAIRS,
                                   check_resources, estimate_resources)
 from contactpipe.testing import TINY_SCENES, tiny_scene
 

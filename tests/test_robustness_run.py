@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-import contactpipe.simulation as simulation
-from contactpipe.accuracy import resolve_accuracy
+import contactpipe.simulation.march as simulation
+from contactpipe.planning.accuracy import resolve_accuracy
 from contactpipe.archive import ArchiveWriter, resume_lock
 from contactpipe.exceptions import ArchiveError, OutputPathError, SceneError
-from contactpipe.files import exclusive_lock
+from contactpipe._util.files import exclusive_lock
 from contactpipe.nomenclature import variables_for
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.planning import check_resources, estimate_resources
@@ -249,7 +249,7 @@ def test_terminated_resumable_run_keeps_its_state(tmp_path):
     target = tmp_path / "run.nc"
     runner = ("import sys, contactpipe as cp\n"
               "from contactpipe.pipeline.cli import main\n"
-              "import contactpipe.simulation as s\n"
+              "import contactpipe.simulation.march as s\n"
               "s.simulate.__kwdefaults__['checkpoint_seconds'] = 0.0\n"
               "sys.exit(main(sys.argv[1:]))\n")
     proc = subprocess.Popen([sys.executable, "-c", runner, "run", str(scene), "-o",
@@ -419,7 +419,7 @@ def test_off_knot_warning_stays_short_for_100000_cycles():
 PUBLISH_RUNNER = r"""
 import os, signal, sys, threading
 import contactpipe.archive.writer as writer
-import contactpipe.files as files
+import contactpipe._util.files as files
 from contactpipe.pipeline.cli import main
 mode, scene, out, delays = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
 real_rename, real_problems, real_publish = os.replace, writer._written_problems, writer.publish

@@ -13,10 +13,10 @@ from hypothesis import strategies as st
 
 from contactpipe import materials
 from contactpipe.exceptions import SceneError
-from contactpipe.files import loads_toml
+from contactpipe._util.files import loads_toml
 from contactpipe.scene import (BodySpec, Fretting, Friction, Geometry, Grid, Load, Output,
                                Scene, Solver, TimeMesh)
-from contactpipe.scene_parts import knot_steps
+from contactpipe.scene.parts import knot_steps
 from contactpipe.testing import TINY_SCENES
 
 REPO = Path(__file__).resolve().parents[1]
@@ -153,7 +153,7 @@ def test_digest_counts_physics_not_output():
 
 
 def test_digest_is_stable_across_processes():
-    code = ("import sys; from contactpipe.files import loads_toml; "
+    code = ("import sys; from contactpipe._util.files import loads_toml; "
             "from contactpipe.scene import Scene; "
             "print(Scene.from_dict(loads_toml(sys.stdin.read())).digest())")
     out = subprocess.run([sys.executable, "-c", code], input=TINY_FRETTING, text=True,
@@ -415,7 +415,7 @@ def test_extreme_constants_never_warn(d):
     another exception."""
     import warnings
 
-    from contactpipe.accuracy import resolve_accuracy
+    from contactpipe.planning.accuracy import resolve_accuracy
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:

@@ -1,4 +1,4 @@
-"""Tests of the subsurface stress stage (contactpipe.solver.subsurface, contactpipe.stress,
+"""Tests of the subsurface stress stage (contactpipe.solver.subsurface, contactpipe.post.stress,
 the ``contactpipe stress`` command and its figures).
 
 References: Boussinesq's and Cerruti's point-force stresses (Johnson 1985 eq. 3.22; Jaeger,
@@ -20,14 +20,14 @@ import xarray as xr
 from scipy import integrate
 
 import contactpipe as cp
-import contactpipe.stress as stress_module
+import contactpipe.post.stress as stress_module
 from contactpipe.analytic.hamilton import (hamilton_stress, hertz_axis_stress,
                                            trailing_edge_tension)
 from contactpipe.pipeline import cli
 from contactpipe.solver.subsurface import (COMPONENTS, TRACTIONS, SubsurfaceOperator,
                                            cache_info, cell_stress, depth_kernels,
                                            point_force_stress, von_mises)
-from contactpipe.stress import open_stress, save_stress, subsurface_stress
+from contactpipe.post.stress import open_stress, save_stress, subsurface_stress
 from contactpipe.testing import tiny_scene
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

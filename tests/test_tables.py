@@ -1,4 +1,4 @@
-"""The table-driven reader (contactpipe.tables) and the tables it reads: the scene's parts,
+"""The table-driven reader (contactpipe.scene.tables) and the tables it reads: the scene's parts,
 the sweep file, the [dask] table and the pipeline file."""
 import copy
 import dataclasses
@@ -16,11 +16,11 @@ from hypothesis import strategies as st
 
 from contactpipe import scene_parts
 from contactpipe.exceptions import SceneError
-from contactpipe.files import loads_toml
+from contactpipe._util.files import loads_toml
 from contactpipe.pipeline import config
-from contactpipe.scene import FIELDS as SCENE_FIELDS
+from contactpipe.scene.model import FIELDS as SCENE_FIELDS
 from contactpipe.scene import Scene
-from contactpipe.tables import Field, Reader, nesting_depth, show
+from contactpipe.scene.tables import Field, Reader, nesting_depth, show
 from contactpipe.testing import TINY_SCENES
 
 PARTS = [scene_parts.Geometry, scene_parts.BodySpec, scene_parts.Friction,

@@ -21,6 +21,7 @@ from scipy import integrate
 
 import contactpipe as cp
 from contactpipe import analytic as an
+from contactpipe.planning.accuracy import resolve_accuracy
 from contactpipe.materials import (ExponentialCreep, TabulatedCreep, kelvin_voigt, maxwell,
                                    prony, step_start_stable_step, zener)
 from contactpipe.solver.memory import (DirectMemory, RecursiveMemory, error_amplification,
@@ -497,7 +498,7 @@ def test_balanced_preset_holds_for_every_law(law, per_tau):
     0.016 %)."""
     sc = lee_radok_scene(law, 16, 1, ramp=1.0).replace({"solver.accuracy": "balanced",
                                                          "grid.size": "auto"})
-    resolved, note = cp.accuracy.resolve_accuracy(sc)
+    resolved, note = resolve_accuracy(sc)
     assert resolved.time.steps == 2 * per_tau, note
     ds = cp.simulate(sc)
     t = ds.time.values

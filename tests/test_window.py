@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe import simulation
+from contactpipe.simulation import march as simulation
 from contactpipe.planning import plan as make_plan
-from contactpipe.simulation import State, _Problem
+from contactpipe.simulation.march import State
+from contactpipe.simulation.problem import Problem
 from contactpipe.solver import window
 from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
 from contactpipe.solver.warm_start import self_similar_start
@@ -35,11 +36,11 @@ def scene(n=64, steps=4, tol=1e-9, halfspace=None):
 @pytest.fixture(scope="module")
 def problem():
     sc = scene()
-    return {form: _Problem(sc, make_plan(sc, tangential=form)) for form in ("scalar", "vector")}
+    return {form: Problem(sc, make_plan(sc, tangential=form)) for form in ("scalar", "vector")}
 
 
 def test_window_operator_is_the_grid_operator_on_a_block(problem):
-    op = problem["scalar"].op_first
+    op = problem["scalar"].ops.first
     n = op.conv.n1
     rng = np.random.default_rng(1)
     rows, cols = slice(20, 44), slice(9, 49)
@@ -59,16 +60,16 @@ def test_window_operator_is_the_grid_operator_on_a_block(problem):
 def _sub_steps(pb, solve, count=4, margin=None):
     """The first ``count`` sub-steps of an 8-sub-step preload, each solved by ``solve``
     from the same start; their results."""
-    op, n = pb.op_first, pb.shape[0]
+    op, n = pb.ops.first, pb.grid.shape[0]
     lim = Tolerances(1e-10, pb.limits.max_iter, pb.limits.max_passes)
-    st = State.initial(pb.shape, [None, None])
+    st = State.initial(pb.grid.shape, [None, None])
     out, f_last = [], 0.0
     for k in range(1, count + 1):
         f = (k / 8) ** 2
         prev = Previous(st.q, st.u, st.p, None, st.motion)
         if f_last:
             prev = self_similar_start(prev, f / f_last, 1 / 3)
-        res = solve(op, pb.gap, np.zeros((3, n, n)), f * W, np.zeros(2), pb.cell, pb.mu,
+        res = solve(op, pb.grid.gap, np.zeros((3, n, n)), f * W, np.zeros(2), pb.grid.cell, pb.grid.mu,
                     pb.plan, prev, lim)
         assert res.converged
         out.append(res)
@@ -80,16 +81,16 @@ def _sub_steps(pb, solve, count=4, margin=None):
 def test_sub_steps_in_windows_match_the_whole_grid(problem, form):
     pb = problem[form]
     whole = _sub_steps(pb, solve_instant)
-    charged0 = pb.conv.charged
+    charged0 = pb.ops.conv.charged
     windowed = _sub_steps(pb, window.solve_in_window)
-    assert pb.conv.charged > charged0                   # the windows' pairs are counted
+    assert pb.ops.conv.charged > charged0               # the windows' pairs are counted
     for a, b in zip(whole, windowed, strict=True):
         p0 = a.p.max()
         assert np.abs(a.p - b.p).max() <= 1e-8 * p0
         assert np.abs(a.q - b.q).max() <= 1e-7 * MU * p0
         assert np.abs(a.u - b.u).max() <= 1e-8 * np.abs(a.u).max()
         assert b.omega3 == pytest.approx(a.omega3, rel=1e-9)
-        Ap = pb.op_first.normal(b.p)                     # K33 p of the whole grid
+        Ap = pb.ops.first.normal(b.p)                     # K33 p of the whole grid
         assert np.abs(b.normal.Ap - Ap).max() <= 1e-12 * np.abs(Ap).max()
         assert np.all(b.p[b.p > 0] > 0) and (b.p > 0).sum() == (a.p > 0).sum()
 
@@ -99,10 +100,10 @@ def test_a_window_too_small_grows(problem, monkeypatch):
     stretched, four times the load later) gives a window the contact outgrows: the check
     finds it and the sub-step is solved again on a larger window."""
     pb = problem["scalar"]
-    op, n = pb.op_first, pb.shape[0]
+    op, n = pb.ops.first, pb.grid.shape[0]
     lim = Tolerances(1e-10, pb.limits.max_iter, pb.limits.max_passes)
     zero = np.zeros((3, n, n))
-    first = solve_instant(op, pb.gap, zero, W / 16, np.zeros(2), pb.cell, pb.mu, pb.plan,
+    first = solve_instant(op, pb.grid.gap, zero, W / 16, np.zeros(2), pb.grid.cell, pb.grid.mu, pb.plan,
                           Previous(np.zeros((2, n, n)), zero, np.zeros((n, n))), lim)
     prev = Previous(first.q, first.u, first.p, None, None)
     grown = []
@@ -113,9 +114,9 @@ def test_a_window_too_small_grows(problem, monkeypatch):
         grown.append(cells is not None)
         return cells
     monkeypatch.setattr(window, "_outside", spy)
-    b = window.solve_in_window(op, pb.gap, zero, W / 4, np.zeros(2), pb.cell, pb.mu,
+    b = window.solve_in_window(op, pb.grid.gap, zero, W / 4, np.zeros(2), pb.grid.cell, pb.grid.mu,
                                pb.plan, prev, lim)
-    a = solve_instant(op, pb.gap, zero, W / 4, np.zeros(2), pb.cell, pb.mu, pb.plan, prev,
+    a = solve_instant(op, pb.grid.gap, zero, W / 4, np.zeros(2), pb.grid.cell, pb.grid.mu, pb.plan, prev,
                       lim)
     assert grown[0] and not grown[-1]
     assert np.abs(a.p - b.p).max() <= 1e-8 * a.p.max()

@@ -33,7 +33,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - exercised on Python 3.10 only
     import tomli as tomllib
 
-from .exceptions import ContactpipeError, OutputPathError, SceneError
+from ..exceptions import ContactpipeError, OutputPathError, SceneError
 
 __all__ = ["atomic_path", "write_text", "write_json", "exclusive_lock", "LockedError",
            "read_toml", "loads_toml", "TOMLDecodeError", "check_output_path",

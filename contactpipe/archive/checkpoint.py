@@ -26,7 +26,7 @@ import zipfile
 import numpy as np
 
 from ..exceptions import ArchiveError, OutputPathError, one_line
-from ..files import atomic_path, temporaries
+from .._util.files import atomic_path, temporaries
 from .schema import resumable_part
 
 __all__ = ["Checkpoint", "resume_lock"]

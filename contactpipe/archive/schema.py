@@ -17,7 +17,7 @@ import xarray as xr
 
 from .._version import __version__
 from ..exceptions import ArchiveError, one_line
-from ..files import TOMLDecodeError, loads_toml
+from .._util.files import TOMLDecodeError, loads_toml
 from ..nomenclature import (
     CONVENTIONS, COORDINATES, FIELD, MAPS, REQUIRED_ATTRS, TANGENTIAL, VARIABLES,
 )

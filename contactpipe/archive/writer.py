@@ -31,8 +31,8 @@ import numpy as np
 import xarray as xr
 
 from ..exceptions import ArchiveError, one_line
-from ..files import publish, temp_name
-from ..interrupts import raise_if_signalled
+from .._util.files import publish, temp_name
+from .._util.interrupts import raise_if_signalled
 from ..nomenclature import FIELD, MAP, MAPS, VARIABLES, cf_attrs
 from .content import content_problems
 from .schema import (
@@ -391,7 +391,7 @@ class ArchiveWriter(_StepWriter):
     def close(self, attrs: dict | None = None) -> pathlib.Path:
         """Finish: final attributes, read back and check, ``complete = "true"``, fsync,
         rename onto the target. Nothing is published when the check finds a problem, nor
-        when a signal came (:func:`~contactpipe.interrupts.raise_if_signalled`, checked
+        when a signal came (:func:`~contactpipe._util.interrupts.raise_if_signalled`, checked
         first and again just before the rename): a resumable writer then keeps its
         part file, whole, for a resume to publish."""
         if self._done:

@@ -19,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .exceptions import SceneError
-from .materials import ExponentialCreep
-from .scene_parts import MAX_POINTS, MAX_STEPS, MIN_POINTS, knot_steps
-from .solver.memory import resolve_body_rule
+from ..exceptions import SceneError
+from ..materials import ExponentialCreep
+from ..scene.parts import MAX_POINTS, MAX_STEPS, MIN_POINTS, knot_steps
+from ..solver.memory import resolve_body_rule
 
 __all__ = ["PRESETS", "Preset", "resolve_accuracy", "knot_multiple", "preload_fractions",
            "preload_error", "choose_preload", "PRELOAD_TARGET", "PRELOAD_AUTO_MAX"]
@@ -129,7 +129,7 @@ def _wanted_steps(pre, scene, knots, cycles, times) -> float:
 
 def knot_multiple(scene) -> int:
     """The least step count whose uniform mesh holds every knot of the load program
-    (:func:`contactpipe.scene_parts.knot_steps`; 0 when none exists below 100 000)."""
+    (:func:`contactpipe.scene.parts.knot_steps`; 0 when none exists below 100 000)."""
     m = knot_steps(scene.load.knots()[0], MAX_KNOT_MULTIPLE)
     return 1 if m == 0 else (m or 0)
 

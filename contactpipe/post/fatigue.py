@@ -59,7 +59,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from ._version import __version__
+from .._version import __version__
 
 __all__ = ["fatigue", "CRITERIA", "min_ball", "longest_chord", "deviatoric_coordinates",
            "plane_normals"]

@@ -46,10 +46,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import analytic
-from .exceptions import ArchiveError, SceneError
-from .materials import composite_modulus
-from .scene import Scene
+from .. import analytic
+from ..exceptions import ArchiveError, SceneError
+from ..materials import composite_modulus
+from ..scene import Scene
 
 __all__ = ["REGIMES", "A_TRANSITION", "Cycle", "FrettingRegime", "turning_points",
            "loop_cycles", "loop_energy", "cycle_of", "regime_of", "closed_form_boundary",

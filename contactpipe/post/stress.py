@@ -52,13 +52,13 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
-from ._version import __version__
-from .archive import open_archive
-from .archive.content import content_problems
-from .archive.schema import join_problems
-from .exceptions import ArchiveError
-from .files import atomic_path, loads_toml, make_folder
-from .solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
+from .._version import __version__
+from ..archive import open_archive
+from ..archive.content import content_problems
+from ..archive.schema import join_problems
+from ..exceptions import ArchiveError
+from .._util.files import atomic_path, loads_toml, make_folder
+from ..solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
 
 __all__ = ["subsurface_stress", "save_stress", "open_stress", "verify_stress",
            "is_stress_file", "body_poisson", "BODIES", "STRESS_VARIABLES", "check_request",

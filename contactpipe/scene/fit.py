@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from . import materials
+from .. import materials
 from .tables import Reader, show
 
 __all__ = ["FIT_YOUNG_RTOL", "fit_options", "fitted_young"]

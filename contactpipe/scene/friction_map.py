@@ -17,7 +17,7 @@ import os
 
 import numpy as np
 
-from .exceptions import SceneError
+from ..exceptions import SceneError
 from .gridded import coordinate_problems, coverage_problems, in_metres, variable_problems
 
 __all__ = ["check_mu_file", "mu_on_grid", "largest", "WHERE"]

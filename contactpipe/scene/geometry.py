@@ -20,7 +20,7 @@ import os
 
 import numpy as np
 
-from .exceptions import SceneError
+from ..exceptions import SceneError
 from .gridded import coordinate_problems, coverage_problems, in_metres, variable_problems
 
 __all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface",

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .exceptions import SceneError
+from ..exceptions import SceneError
 
 __all__ = ["Field", "Reader", "show", "is_number", "is_integer", "is_sequence", "as_list",
            "to_float", "did_you_mean", "nesting_depth", "MISSING", "KINDS", "Part"]
@@ -447,7 +447,7 @@ class Part:
     (validated on construction too) and written back by :meth:`to_dict`.
 
     A subclass sets ``PATH`` (its dotted name when constructed alone, for messages) and
-    ``FIELDS`` (one :class:`~contactpipe.tables.Field` per dataclass field, in file
+    ``FIELDS`` (one :class:`~contactpipe.scene.tables.Field` per dataclass field, in file
     order); it overrides :meth:`read` only to add rules that tie keys together.
     """
 

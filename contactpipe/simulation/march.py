@@ -18,7 +18,7 @@ instantaneous (glassy) response; with ``"frictionless"`` the first instant is th
 initial frictionless normal solve (outer loop, step 1).
 
 Before anything is allocated, :func:`simulate` checks the output path
-(:func:`contactpipe.files.check_output_path`) and the memory the run needs
+(:func:`contactpipe._util.files.check_output_path`) and the memory the run needs
 (:func:`contactpipe.planning.estimate_resources`). A resumable run holds a lock on its
 target's resume state (:func:`contactpipe.archive.resume_lock`) and checkpoints beside the
 archive writers (:class:`contactpipe.archive.Checkpoint`).
@@ -27,41 +27,30 @@ from __future__ import annotations
 
 import time as _time
 import warnings
-from dataclasses import replace
 
 import numpy as np
 
-from .accuracy import (PRELOAD_TARGET, PRESETS, choose_preload, knot_multiple,
-                       preload_fractions, resolve_accuracy)
-from .archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
-from .exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
-                         OutputPathError, ResumeNotice, SceneError, one_line)
-from .files import LockedError, check_output_path, exclusive_lock, make_folder
-from .interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
-from .materials import FIT_TOLERANCE, dundurs_beta
-from .nomenclature import variables_for
-from .planning import check_resources, estimate_resources, plan as make_plan
-from .solver.coupling import FREEDOMS, Controls, Previous, Tolerances, solve_instant
-from .solver.warm_start import continued_start, self_similar_start
-from .solver.window import solve_in_window
-from .solver.memory import BodyMemory, make_memory, resolve_body_rule
-from .solver.state import State
-from .solver.operator import (ContactOperator, body_spectra_parts, convolver,
-                              history_displacement, history_kernels)
+from ..archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
+from ..exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
+                         OutputPathError, ResumeNotice, one_line)
+from .._util.files import LockedError, check_output_path, exclusive_lock, make_folder
+from .._util.interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
+from ..nomenclature import variables_for
+from ..planning import check_resources, estimate_resources, plan as make_plan
+from ..planning.accuracy import resolve_accuracy
+from ..solver.coupling import FREEDOMS, Previous, solve_instant
+from ..solver.warm_start import continued_start, self_similar_start
+from ..solver.window import solve_in_window
+from ..solver.state import State
+from . import preload
+from .preload import Path
+from .problem import Problem, grid_coordinates
 
 __all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
            "ResumeNotice", "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
 
-#: Knots listed by the off-mesh warning; the others are counted.
-KNOTS_LISTED = 5
 #: A cell sticks while |q| < mu p (1 - STICK_MARGIN) (rounding of the projection).
 STICK_MARGIN = 1e-9
-#: Pressures [Pa] and displacements [m] a run may reach: their squares, summed over a
-#: grid, stay within float64 (about 1e-308 .. 1e308).
-SCALE_RANGE = (1e-150, 1e150)
-#: Tolerance of the coarser paths of a frictional preload's error estimate, as a fraction
-#: of the path's error target (:meth:`_Problem.limits_of`) [1].
-PATH_TOLERANCE = 1e-5
 
 
 class ResumeLockedError(LockedError):
@@ -72,344 +61,14 @@ class ResumeWarning(UserWarning):
     """The resume state of a target was damaged or unusable: the run starts afresh."""
 
 
-def grid_coordinates(scene):
-    """Cell-centre coordinates x1, x2 [m] and spacings d1, d2 [m] of the scene's grid."""
-    n1, n2 = scene.grid.points
-    size = scene.grid.size
-    if isinstance(size, str):
-        size = scene.resolved_grid_size()
-    L1, L2 = float(size[0]), float(size[1])
-    d1, d2 = L1 / n1, L2 / n2
-    x1 = -L1 / 2 + (np.arange(n1) + 0.5) * d1
-    x2 = -L2 / 2 + (np.arange(n2) + 0.5) * d2
-    return x1, x2, d1, d2
-
-
-def _n_steps(scene):
-    if scene.time.steps is not None:
-        return int(scene.time.steps)
-    return len(scene.load.knots()[0]) - 1
-
-
-# --------------------------------------------------------------------------- problem
-
-class _Problem:
-    """What does not change during the march: grid, load program, operators, plan."""
-
-    def __init__(self, scene, pl, fft=None, threads=None, tuning=None):
-        self.scene, self.plan, sv = scene, pl, scene.solver
-        self.x1, self.x2, d1, d2 = grid_coordinates(scene)
-        self.d1, self.d2 = d1, d2
-        self.shape = (len(self.x1), len(self.x2))
-        self.cell = d1 * d2
-        self.gap = np.asarray(scene.geometry.gap(self.x1, self.x2), dtype=float)
-        self.steps = _n_steps(scene)
-        _warn_off_knots(scene, self.steps)
-        self.program = scene.load.programs(self.steps)
-        self.t = self.program.t
-        # the force programs (NaN where the freedom is displacement-controlled)
-        self.W, self.T1, self.T2 = self.program.force[:3]
-        self.dt = float(self.t[1] - self.t[0]) if self.t.size > 1 else 0.0
-        self.mu = scene.friction.on_grid(self.x1, self.x2)      # a float, or a map
-        #: the contact's growth exponent under load, where self-similar (solver.warm_start)
-        self.similar = {"sphere": 1 / 3, "ellipsoid": 1 / 3}.get(scene.geometry.shape)
-        self.X1, self.X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
-        self.limits = Tolerances(sv.tolerance, sv.max_iterations, sv.max_coupling_passes, tuning)
-        self.tang = pl.tangential != "none"
-        self.bodies = (scene.indenter.body(), scene.halfspace.body())
-        self.beta = float(dundurs_beta(*self.bodies))
-        backend, nthreads = fft or sv.fft, threads or sv.threads
-        n1, n2 = self.shape
-        # extreme constants may overflow the kernels: harmless here, refused just below
-        with np.errstate(over="ignore", invalid="ignore"):
-            spectra = [body_spectra_parts(b, n1, n2, d1, d2, backend, nthreads)
-                       for b in self.bodies]
-            self.conv = convolver(n1, n2, backend, int(nthreads))
-            fresh = self.new_memories()
-            self.spectra = spectra
-            self._operators = {}
-            self.op_first = self.operator(self._weights(fresh, True))
-            self.hist_kernels = history_kernels(*(s if m is not None else None
-                                                  for s, m in zip(spectra, fresh, strict=True)))
-            self.op_next = self.operator(self._weights(fresh, False)) \
-                if self.t.size > 1 else self.op_first
-            #: the time rule each body's memory applies ("auto" resolved), None without one
-            self.rules = [None if m is None else m.rule for m in fresh]
-        self._check_finite(d1, d2)
-        self._preload, self._trial = None, None       # see preload()
-
-    def operator(self, weights) -> ContactOperator:
-        """The operator of an instant whose traction has the creep weights ``weights``
-        (one per body: a float, or a tuple with one per kernel part of a body whose
-        Poisson ratio varies), made once per distinct tuple: a time rule may weight t0,
-        its start steps and the later steps apart."""
-        key = tuple(float(w) if np.ndim(w) == 0 else tuple(float(x) for x in w)
-                    for w in weights)
-        if key not in self._operators:
-            self._operators[key] = ContactOperator(*self.spectra, *key, self.conv)
-        return self._operators[key]
-
-    def instant_weights(self, mems) -> list:
-        """The creep weights of the next instant's traction, one per body [1]."""
-        return [self._body_weight(b, m, None if m is None else m.instant_weight)
-                for b, m in zip(self.bodies, mems, strict=True)]
-
-    def new_memories(self) -> list:
-        """A fresh memory per viscoelastic body (None for the others): one recursion per
-        kernel part, all with the rule the body's compliances call for."""
-        if self.plan.memory == "none":
-            return [None, None]
-        out = []
-        for b in self.bodies:
-            if not b.has_memory:
-                out.append(None)
-                continue
-            rule = resolve_body_rule(b.rule_creeps, self.dt, self.plan.time_rule)
-            parts = [make_memory(c, self.dt, rule, (3,) + self.shape) for c in b.part_creeps]
-            out.append(parts[0] if len(parts) == 1 else BodyMemory(parts))
-        return out
-
-    @staticmethod
-    def _body_weight(b, m, weight):
-        """A body's creep weight(s): 0 when rigid, the memory's, or phi(0) of each part
-        without a memory (1 for an elastic body)."""
-        if b.rigid:
-            return 0.0
-        if m is not None:
-            return weight
-        w = tuple(float(c.phi0) for c in b.part_creeps) if b.has_memory else (1.0,)
-        return w[0] if len(w) == 1 else w
-
-    def _weights(self, mems, first):
-        return [self._body_weight(b, m, None if m is None else
-                                  (m.weight0 if first else m.weight))
-                for b, m in zip(self.bodies, mems, strict=True)]
-
-    def _check_finite(self, d1, d2):
-        """Refuse constants whose influence coefficients float64 cannot hold, or whose
-        pressures and displacements it cannot square (the solvers' inner products)."""
-        kernels = [op.k for op in (self.op_first, self.op_next) if not op.rigid]
-        kernels += [p for k in self.hist_kernels if k is not None
-                    for p in (k if isinstance(k, list) else [k])]
-        sc = self.scene
-        where = (f"indenter: {sc.indenter.material}{_young(sc.indenter)}, halfspace: "
-                 f"{sc.halfspace.material}{_young(sc.halfspace)}, cells {d1:.3g} x {d2:.3g} m, "
-                 f"creep weights {_show_weight(self.op_next.w1)}, "
-                 f"{_show_weight(self.op_next.w2)} with steps of "
-                 f"{self.dt:.3g} s")
-        if not all(np.isfinite(v).all() for k in kernels for v in k.values()):
-            raise SceneError(
-                f"the influence coefficients overflow float64 ({where}): the moduli, "
-                f"relaxation times or time span are beyond what a computation can hold")
-        p_star = self._pressure_scale()
-        if p_star == 0.0:
-            return
-        for op in (self.op_first, self.op_next):
-            if op.rigid:
-                continue
-            u_star = abs(op.self_influence("33")) * p_star
-            if not (SCALE_RANGE[0] <= p_star <= SCALE_RANGE[1]
-                    and SCALE_RANGE[0] <= u_star <= SCALE_RANGE[1]):
-                raise SceneError(
-                    f"the scene's scales are beyond float64: the normal force on one cell, "
-                    f"{p_star:.3g} Pa, moves it by {u_star:.3g} m ({where}); the solvers "
-                    f"square pressures and displacements, so both must lie within "
-                    f"{SCALE_RANGE[0]:g} .. {SCALE_RANGE[1]:g}: check the moduli, the "
-                    f"relaxation times, load.normal_force and the grid")
-
-    def _pressure_scale(self) -> float:
-        """The largest normal force on one cell [Pa]; under approach control the pressure
-        that moves one cell by the largest approach (an upper bound)."""
-        if self.program.is_force(0):
-            return float(np.max(np.abs(self.W))) / self.cell
-        op = self.op_first if not self.op_first.rigid else self.op_next
-        if op.rigid:
-            return 0.0
-        approach = float(np.nanmax(np.abs(self.program.motion[0])))
-        return approach / max(abs(op.self_influence("33")), 1e-300)
-
-    def controls(self, k, f=1.0):
-        """The six freedoms at instant ``k`` for the solver (a fraction ``f`` of them in a
-        preload sub-step), or None where W and T are force-controlled and the rotations
-        held at zero (the solver's own default)."""
-        if not self.program.general:
-            return None
-        force, motion = self.program.at(k)
-        return Controls(f * force, f * motion, self.x1, self.x2)
-
-    def twist(self):
-        """The in-plane motion (2, N1, N2) of body 1's surface per unit rotation φ3 [m]."""
-        return np.stack([-self.X2, self.X1])
-
-    def fractions(self, first, T):
-        """The sub-steps of an instant: those of a frictional preload at t0
-        (:func:`preload_fractions`, their count from :meth:`preload`), else one."""
-        pl = self.plan
-        if first and self.tang and pl.preload == "frictional" and \
-                (pl.coupling != "none" or np.any(T)):
-            n = self._trial if self._trial is not None else self.preload()["substeps"]
-            return preload_fractions(n)
-        return np.array([1.0])
-
-    def _preload_active(self) -> bool:
-        pl = self.plan
-        return bool(self.tang and pl.preload == "frictional" and self.t.size > 0 and
-                    (pl.coupling != "none" or self.T1[0] != 0 or self.T2[0] != 0))
-
-    def preload(self) -> dict:
-        """The frictional preload's sub-step count and its estimated error (cached;
-        :func:`contactpipe.accuracy.choose_preload`). The preload path at t0 starts from
-        the unloaded state without history, so it is known before the march: coarser
-        paths run on a scratch state (:meth:`_preload_path`).
-
-        Returns
-        -------
-        dict
-            ``substeps`` (0 without a frictional preload), ``error`` (estimated rms error
-            of the q field over the contact, over mu p_max [1], or None), ``pairs`` (the
-            FFT pairs the coarser paths cost).
-        """
-        if self._preload is None:
-            pairs0 = self.conv.pairs
-            n, est = 0, None
-            if self._preload_active():
-                acc = self.scene.solver.accuracy
-                target = PRESETS[acc].target if acc in PRESETS else PRELOAD_TARGET
-                n, est = choose_preload(self.scene.solver.preload_substeps,
-                                        self._preload_path, self.mu, target)
-            self._preload = {"substeps": n, "error": est,
-                             "pairs": int(self.conv.pairs - pairs0)}
-        return self._preload
-
-    def _preload_path(self, substeps):
-        """(q, p) after a frictional preload in ``substeps`` sub-steps on a scratch state,
-        or None when it does not converge."""
-        self._trial = int(substeps)
-        try:
-            st = State.initial(self.shape, self.new_memories())
-            _step(self, st, 0)
-            return st.q.copy(), st.p.copy()
-        except ConvergenceError:
-            return None
-        finally:
-            self._trial = None
-
-    def limits_of(self, f):
-        """The solver limits of a (sub-)step at load fraction ``f``: the scene's, but the
-        coarser paths of a frictional preload's error estimate are solved to
-        :data:`PATH_TOLERANCE` of the path's error target (never tighter than the scene's
-        tolerance): they only measure a difference of 0.3-4 % of mu p_max. The path of the
-        run itself keeps the full tolerance at every station, so that a run is determined
-        to its tolerance whatever the process (FFTW plans) and a resumed run matches an
-        uninterrupted one (docs/time-integration.md)."""
-        if self._trial is None:
-            return self.limits
-        acc = self.scene.solver.accuracy
-        target = PRESETS[acc].target if acc in PRESETS else PRELOAD_TARGET
-        return replace(self.limits, tol=max(self.limits.tol, PATH_TOLERANCE * target))
-
-    def sub_plan(self, first):
-        """The paper's initial frictionless normal solve at t0, then shear from there."""
-        if first and self.tang and self.plan.preload == "frictionless":
-            return replace(self.plan, tangential="none", coupling="none")
-        return self.plan
-
-    def history(self, st, k):
-        """The known displacement U [m] at instant ``k`` from the bodies' history tractions.
-
-        Raises
-        ------
-        SceneError
-            The history tractions overflow float64 (a creep function grown beyond any
-            representable traction over an absurd time span).
-        """
-        U = np.zeros((3,) + self.shape)
-        if any(m is not None for m in st.memories) and k > 0:
-            outputs = (1, 2, 3) if self.tang else (3,)
-            # an overflow here is harmless: it is refused just below, before any use
-            with np.errstate(over="ignore", invalid="ignore"):
-                h = [None if m is None else m.known() for m in st.memories]
-                Uh = history_displacement(self.hist_kernels, h[0], h[1], self.conv,
-                                          outputs=outputs)
-            if not np.isfinite(Uh).all():
-                raise SceneError(
-                    f"step {k} (t = {self.t[k]:.6g} s): the viscoelastic history overflows "
-                    f"float64 (the creep of a body over load.time up to {self.t[-1]:.3g} s "
-                    f"grows beyond any representable displacement); shorten load.time or "
-                    f"check the relaxation times")
-            U[[o - 1 for o in outputs]] = Uh
-        return U
-
-    def attrs(self, accuracy_note: str) -> dict:
-        pl, scene = self.plan, self.scene
-        out = {
-            "title": f"contactpipe simulation: {scene.name}",
-            "scene": scene.to_toml(),
-            "models": pl.describe(),
-            "model_normal": pl.normal, "model_tangential": pl.tangential,
-            "model_coupling": pl.coupling, "model_memory": pl.memory,
-            "time_rule": pl.time_rule, "preload": pl.preload,
-            "dundurs_beta": self.beta,
-            "fft_backend": self.conv.backend,
-            "grid_spacing_m": [self.d1, self.d2],
-            "grid_points": list(self.shape),
-            "time_steps": self.steps,
-        }
-        if accuracy_note:
-            out["accuracy"] = accuracy_note
-        out.update(self._material_attrs())
-        pre = self.preload()
-        if pre["substeps"]:
-            out["preload_substeps"] = pre["substeps"]
-            out["preload_estimate_fft_pairs"] = pre["pairs"]
-            if pre["error"] is not None:
-                out["preload_error_estimate"] = pre["error"]
-        return out
-
-    def _material_attrs(self) -> dict:
-        """What the bodies' memories used: the time rule each resolved to, the Poisson
-        model, and the fit of a creep function from a table."""
-        out = {}
-        sides = ("indenter", "halfspace")
-        used = [f"{side}: {rule}" for side, rule in zip(sides, self.rules, strict=True) if rule]
-        if used:
-            out["time_rule_resolved"] = ", ".join(used)
-        for side, b in zip(sides, self.bodies, strict=True):
-            if b.split:
-                out[f"{side}_poisson_model"] = ("elastic bulk: the Poisson ratio varies "
-                                                "from its value where phi = 1")
-            spec = getattr(self.scene, side)
-            fit = spec.fit()
-            if fit is not None:
-                out[f"{side}_fit_rms_error"] = fit.rms_error
-                out[f"{side}_fit_max_error"] = fit.max_error
-                out[f"{side}_fit_terms"] = len(fit.creep.tau)
-                out[f"{side}_fit_compliance_error"] = fit.compliance_error
-                out[f"{side}_fit_tolerance"] = spec.fit_tolerance or FIT_TOLERANCE
-        return out
-
-    def written(self, k) -> int:
-        """Instants in the archive once instant ``k`` is done."""
-        stride, last = int(self.scene.output.stride), self.t.size - 1
-        return k // stride + 1 + (1 if k == last and k % stride else 0)
-
-
-def _show_weight(w) -> str:
-    return f"{w:.3g}" if np.ndim(w) == 0 else "(" + ", ".join(f"{x:.3g}" for x in w) + ")"
-
-
-def _young(part) -> str:
-    young = getattr(part, "young", None)
-    return f" young = {young:g} Pa" if young is not None else ""
-
-
 # --------------------------------------------------------------------------- one instant
 
-def _step(pb: _Problem, st: State, k: int) -> dict:
-    """Solve instant ``k`` from ``st`` (updated in place); return its record."""
+def _step(pb: Problem, st: State, k: int, path: Path) -> dict:
+    """Solve instant ``k`` from ``st`` (updated in place); return its record. ``path``
+    says how the first instant's preload is solved (:class:`.preload.Path`)."""
     first = k == 0
-    op = pb.operator(pb.instant_weights(st.memories))
-    pairs0 = pb.conv.pairs
+    op = pb.ops.operator(pb.ops.instant_weights(st.memories))
+    pairs0 = pb.ops.conv.pairs
     U = pb.history(st, k)
     T = np.array([pb.T1[k], pb.T2[k]])
     # the normal problem is unchanged from the previous instant: reuse its solution
@@ -417,7 +76,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
                    and _same_normal(pb.program, k) and st.normal is not None)
     iterations, passes, f_last = 0, 0, 0.0
     q_before, p_before, c = st.q, st.p, pb.program.continuation(k)
-    fractions = pb.fractions(first, _drive(pb.program, k))
+    fractions = pb.fractions(first, _drive(pb.program, k), path.substeps)
     windowed = not first or fractions.size > 1 and pb.similar is not None   # solver.window
     for f in fractions:
         sub = pb.sub_plan(first)
@@ -428,8 +87,8 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
             previous = continued_start(previous, st.dq, c, st.dp, pb.limits.tuning)
         f_last = f
         res = (solve_in_window if windowed else solve_instant)(
-            op, pb.gap, U, f * pb.W[k], f * T, pb.cell, pb.mu, sub, previous,
-            pb.limits_of(f), controls=pb.controls(k, f))
+            op, pb.grid.gap, U, f * pb.W[k], f * T, pb.grid.cell, pb.grid.mu, sub, previous,
+            path.limits, controls=pb.controls(k, f))
         iterations += res.iterations
         passes += res.passes
         if not res.converged:
@@ -440,7 +99,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
             raise _failure(pb, k, T, res)
         _advance(pb, st, op, sub, U, res)
         _take_motions(pb, st, k, f, res)
-    if fractions.size > 1 and pb._trial is None:   # the preload's windows of the contact
+    if fractions.size > 1 and not path.scratch:  # the preload's windows of the contact
         op.drop_windows()                           # (solver.window): the march makes its own
     st.dq, st.dp = st.q - q_before, st.p - p_before
     _check_edges(st.p, k, pb.t[k], pb.scene)
@@ -448,7 +107,7 @@ def _step(pb: _Problem, st: State, k: int) -> dict:
         if m is not None:
             m.commit(np.stack([st.q[0], st.q[1], st.p]))
     st.k = k
-    return _record(pb, st, pb.W[k], T, iterations, passes, pb.conv.pairs - pairs0)
+    return _record(pb, st, pb.W[k], T, iterations, passes, pb.ops.conv.pairs - pairs0)
 
 
 def _same_normal(program, k) -> bool:
@@ -494,14 +153,14 @@ def _advance(pb, st, op, sub, U, res):
         du = res.u[:2] - st.u[:2]
         rigid = res.domega[:, None, None]
         if res.dphi3 != 0.0:
-            rigid = rigid + res.dphi3 * pb.twist()
+            rigid = rigid + res.dphi3 * pb.grid.twist()
         ds = np.where(contact, rigid - du, 0.0)
-        stick = contact & (np.hypot(res.q[0], res.q[1]) < pb.mu * res.p * (1 - STICK_MARGIN))
+        stick = contact & (np.hypot(res.q[0], res.q[1]) < pb.grid.mu * res.p * (1 - STICK_MARGIN))
         ds[:, stick] = 0.0
         if pb.plan.tangential == "scalar":
             ds[1] = 0.0
         st.s = st.s + ds
-        st.dissipation += float(np.sum(res.q * ds)) * pb.cell
+        st.dissipation += float(np.sum(res.q * ds)) * pb.grid.cell
         st.omega[:2] += res.domega
         st.phi[2] += res.dphi3
     st.p, st.q, st.u = res.p, res.q, res.u
@@ -517,7 +176,7 @@ def _failure(pb, k, T, res) -> ConvergenceError:
     if res.failed == "sliding":
         return _sliding_failure(pb, k, res)
     if not pb.program.is_force(0):            # approach control: W is the one reached
-        W = float(res.p.sum()) * pb.cell
+        W = float(res.p.sum()) * pb.grid.cell
     if res.failed == "tangential" and np.hypot(*T) >= 0.99 * mu * W > 0:
         return GrossSlidingError(
             f"step {k} (t = {tk:.6g} s): the stick zone was lost under "
@@ -532,7 +191,7 @@ def _failure(pb, k, T, res) -> ConvergenceError:
                 f"left the pressure moving by {res.residual:.3g} of W; the pair couples "
                 f"with Dundurs beta = {pb.beta:.2f}, mu = {pb.scene.friction.largest:g})"
                 + "; raise solver.max_coupling_passes or take smaller load steps")
-    rigid = (pb.op_first if k == 0 else pb.op_next).rigid
+    rigid = (pb.ops.first if k == 0 else pb.ops.next).rigid
     if rigid and res.failed == "normal":
         return ConvergenceError(
             f"normal problem at step {k} (t = {tk:.6g} s) has no solution "
@@ -545,7 +204,7 @@ def _failure(pb, k, T, res) -> ConvergenceError:
         hint += ("; the computation overflowed float64 (the forces, moduli or lengths of "
                  "the scene are beyond its range)")
     if res.failed == "normal" and pb.program.general:
-        keys = [key for i, key in zip((3, 4), pb.program.keys[3:5], strict=True)
+        keys = [key for i, key in zip((3, 4), pb.program.keys[3:5])
                 if key.startswith("moment")]
         if keys:
             hint += (f"; a force-controlled {' and '.join('load.' + k_ for k_ in keys)} may "
@@ -624,9 +283,9 @@ def _check_edges(p, k, tk, scene, stopped=""):
 
 def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
     """The outputs of an instant, as the archive stores them."""
-    p, q, u, omega, mu, cell = st.p, st.q, st.u, st.omega, pb.mu, pb.cell
+    p, q, u, omega, mu, cell = st.p, st.q, st.u, st.omega, pb.grid.mu, pb.grid.cell
     contact = p > 0
-    h = np.where(contact, 0.0, np.maximum(pb.gap + u[2] - omega[2], 0.0))
+    h = np.where(contact, 0.0, np.maximum(pb.grid.gap + u[2] - omega[2], 0.0))
     status = np.zeros(p.shape, dtype=np.int8)
     if pb.tang:
         slip = contact & (np.hypot(q[0], q[1]) >= mu * p * (1 - STICK_MARGIN))
@@ -651,30 +310,11 @@ def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
 def _moments(pb, st) -> dict:
     """The moments reached (M1 = Δ Σ p x2, M2 = Δ Σ p x1, M3 = Δ Σ (q2 x1 − q1 x2)) [N m]
     and the rotations (φ1, φ2, φ3) [rad], whichever way each is controlled."""
-    p, q, cell = st.p, st.q, pb.cell
-    M3 = float(np.sum(q[1] * pb.X1 - q[0] * pb.X2)) * cell if pb.tang else 0.0
-    return {"M1": float(np.sum(p * pb.X2)) * cell, "M2": float(np.sum(p * pb.X1)) * cell,
+    p, q, cell = st.p, st.q, pb.grid.cell
+    M3 = float(np.sum(q[1] * pb.grid.X1 - q[0] * pb.grid.X2)) * cell if pb.tang else 0.0
+    return {"M1": float(np.sum(p * pb.grid.X2)) * cell, "M2": float(np.sum(p * pb.grid.X1)) * cell,
             "M3": M3, "phi1": float(st.phi[0]), "phi2": float(st.phi[1]),
             "phi3": float(st.phi[2])}
-
-
-def _warn_off_knots(scene, steps):
-    """A load knot between mesh instants is cut off (a turning point of a fretting loop
-    is never reached): say so, with the step counts that would hold every knot."""
-    t = np.asarray(scene.load.knots()[0], dtype=float)
-    if t.size < 3 or steps < 1:
-        return
-    pos = (t[1:-1] - t[0]) / (t[-1] - t[0]) * steps
-    off = np.abs(pos - np.round(pos)) > 1e-6
-    if off.any():
-        m = knot_multiple(scene)
-        hint = f"; use a multiple of {m} steps" if m else ""
-        cut = t[1:-1][off]
-        listed = ", ".join(f"{x:g}" for x in cut[:KNOTS_LISTED])
-        more = f" and {cut.size - KNOTS_LISTED} more" if cut.size > KNOTS_LISTED else ""
-        warnings.warn(f"time.steps = {steps}: the load knots at t = {listed}{more} s fall "
-                      f"between instants of the time mesh, so the program is cut there{hint}",
-                      stacklevel=4)
 
 
 # --------------------------------------------------------------------------- the march
@@ -689,11 +329,11 @@ def _start(pb, path, attrs, ckpt):
     out = pb.scene.output
     names = variables_for(pb.tang)
     kw = {"precision": out.precision, "compress": out.compress}
-    if np.ndim(pb.mu):
-        kw["maps"] = {"mu": pb.mu}
-    st = State.initial(pb.shape, pb.new_memories())
+    if np.ndim(pb.grid.mu):
+        kw["maps"] = {"mu": pb.grid.mu}
+    st = State.initial(pb.grid.shape, pb.ops.new_memories())
     if path is None:
-        return MemoryWriter(None, pb.x1, pb.x2, names, attrs,
+        return MemoryWriter(None, pb.grid.x1, pb.grid.x2, names, attrs,
                             capacity=pb.written(pb.t.size - 1), **kw), st
     if ckpt is not None:
         found = ckpt.found()
@@ -705,7 +345,7 @@ def _start(pb, path, attrs, ckpt):
                     raise ValueError(f"instant {k} with {written} written does not fit the "
                                      f"scene's {pb.t.size} instants")
                 st.restore(saved, k)
-                writer = ArchiveWriter(path, pb.x1, pb.x2, names, attrs, resumable=True,
+                writer = ArchiveWriter(path, pb.grid.x1, pb.grid.x2, names, attrs, resumable=True,
                                        resume_steps=written, **kw)
                 warnings.warn(ResumeNotice(f"{path.name}: resuming from {_instant(pb, k)}, "
                                            f"its checkpoint ({written} instants written)"),
@@ -720,8 +360,8 @@ def _start(pb, path, attrs, ckpt):
                                         f"({one_line(e, with_type=False)}); starting afresh"),
                           stacklevel=4)
             ckpt.discard()
-            st = State.initial(pb.shape, pb.new_memories())
-    return ArchiveWriter(path, pb.x1, pb.x2, names, attrs, resumable=ckpt is not None,
+            st = State.initial(pb.grid.shape, pb.ops.new_memories())
+    return ArchiveWriter(path, pb.grid.x1, pb.grid.x2, names, attrs, resumable=ckpt is not None,
                          **kw), st
 
 
@@ -749,11 +389,13 @@ def _progress(scene, total, initial):
 def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds, wall0):
     """Every instant from the start state to the end; the archive (or Dataset).
 
-    A signal is acted on between two instants (:func:`contactpipe.interrupts.deferred`),
+    A signal is acted on between two instants (:func:`contactpipe._util.interrupts.deferred`),
     where the state is whole: a resumable run checkpoints the instant it reached, then
     stops; and just before the archive is renamed into place (nothing is published).
     """
-    writer, st = _start(pb, path, pb.attrs(accuracy_note), ckpt)
+    pre = preload.estimate(pb, _step)
+    first = Path(pre["substeps"], pb.limits)
+    writer, st = _start(pb, path, pb.attrs(accuracy_note, pre), ckpt)
     stride, last = int(pb.scene.output.stride), pb.t.size - 1
     bar = _progress(pb.scene, pb.t.size, st.k + 1) if progress else None
     last_ckpt = _time.perf_counter()
@@ -764,7 +406,7 @@ def _march(pb, path, ckpt, accuracy_note, on_step, progress, checkpoint_seconds,
             for k in range(st.k + 1, pb.t.size):
                 raise_if_signalled()
                 whole = None
-                record = _step(pb, st, k)
+                record = _step(pb, st, k, first)
                 if k % stride == 0 or k == last:
                     writer.append(pb.t[k], record)
                 whole = k
@@ -879,21 +521,21 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     opts = (accuracy_note, on_step, progress, checkpoint_seconds, wall0)
     with signals_as_interrupt(only_default=True):
         if path is None:
-            return _march(_Problem(scene, pl, fft, threads, tuning), None, None, *opts)
+            return _march(Problem(scene, pl, fft, threads, tuning), None, None, *opts)
         try:
             make_folder(path.parent)
         except OSError as e:
             raise OutputPathError(f"archive {path}: cannot create its folder "
                                   f"({e.strerror or one_line(e)})") from None
         if not resume:
-            pb = _Problem(scene, pl, fft, threads, tuning)
+            pb = Problem(scene, pl, fft, threads, tuning)
             return open_archive(_march(pb, path, None, *opts))
         lock = resume_lock(path)
         with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
             ckpt = Checkpoint(path, scene.digest())
             ckpt.clean()                # what a run killed while checkpointing left
             try:
-                result = _march(_Problem(scene, pl, fft, threads, tuning), path, ckpt, *opts)
+                result = _march(Problem(scene, pl, fft, threads, tuning), path, ckpt, *opts)
             finally:
                 lock.unlink(missing_ok=True)
         return open_archive(result)

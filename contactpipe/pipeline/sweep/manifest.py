@@ -27,7 +27,7 @@ import re
 
 from .._version import __version__
 from ..exceptions import ArchiveError
-from ..files import utc_now, write_json
+from .._util.files import utc_now, write_json
 from .members import MODES, STATUSES, coord_value, jsonable
 
 __all__ = ["MANIFEST", "MANIFEST_FORMAT", "read_manifest", "check_manifest", "new_manifest",

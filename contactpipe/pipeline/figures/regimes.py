@@ -2,7 +2,7 @@
 
 :func:`fretting_map` opens every finished member of a sweep folder, reads its fretting
 loop (T1 against the imposed omega1) and classifies it by Fouvry's energy ratio
-(:mod:`contactpipe.fretting`: partial slip, mixed or gross slip), beside the closed-form
+(:mod:`contactpipe.post.fretting`: partial slip, mixed or gross slip), beside the closed-form
 regime of Mindlin's elastic sphere (delta* against delta_gs). :func:`write_regime_table`
 writes the table as CSV; :mod:`contactpipe.pipeline.plot_fretting` draws the map.
 
@@ -22,8 +22,8 @@ import numpy as np
 import xarray as xr
 
 from ..exceptions import ArchiveError
-from ..files import atomic_path, check_output_dir, check_output_path, make_folder
-from ..fretting import boundary_constants, fretting_regime
+from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from ..post.fretting import boundary_constants, fretting_regime
 from .combine import open_member
 from .inputs import scene_of
 from .manifest import read_manifest

@@ -49,7 +49,7 @@ Files in ``out_dir``
     finish; checked on every read, so a manifest edited by hand is refused with one line
     naming the key instead of a bare KeyError.
 ``.sweep.lock``
-    Held (:func:`contactpipe.files.exclusive_lock`) while a sweep runs: a second sweep on
+    Held (:func:`contactpipe._util.files.exclusive_lock`) while a sweep runs: a second sweep on
     the same folder stops at once with :class:`SweepLockedError`. The file stays; the
     lock dies with its process.
 
@@ -131,10 +131,10 @@ import stat
 import sys
 import time
 
-from ..accuracy import resolve_accuracy
+from ..planning.accuracy import resolve_accuracy
 from ..archive import open_archive
 from ..exceptions import ArchiveError, SceneError, one_line
-from ..files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
+from .._util.files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
                      make_folder)
 from ..planning import check_time, estimate_resources
 from ..scene import Scene

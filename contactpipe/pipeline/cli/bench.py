@@ -68,7 +68,7 @@ import time
 import numpy as np
 
 from ..exceptions import SceneError
-from ..files import check_output_path, write_text
+from .._util.files import check_output_path, write_text
 from ..scene import Scene
 from ..simulation import simulate
 from ..solver.convolution import Convolver

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 
-from ..files import check_output_dir, check_output_path
+from .._util.files import check_output_dir, check_output_path
 from . import compare as compare_stage
 from .plot import plot_profiles, save_figure
 

@@ -46,7 +46,7 @@ import xarray as xr
 
 from ..archive import open_archive
 from ..exceptions import ArchiveError
-from ..files import atomic_path, check_output_dir, check_output_path, make_folder
+from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
 from .inputs import grid_of, radius_of_area, scene_of
 from .reference import LOADING_FORMS, closed_form_solution
 
@@ -593,7 +593,7 @@ def check_table_path(out, inputs=()) -> pathlib.Path:
         The suffix is neither ``.nc`` nor ``.csv``.
     OutputPathError
         Empty, a directory, a device or other special file, one of ``inputs``, or a
-        folder that is a file (:func:`contactpipe.files.check_output_path`).
+        folder that is a file (:func:`contactpipe._util.files.check_output_path`).
     """
     out = check_output_path(out, "error table", inputs=inputs)
     if out.suffix.lower() not in TABLE_SUFFIXES:

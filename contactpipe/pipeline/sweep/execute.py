@@ -53,7 +53,7 @@ from tqdm.auto import tqdm
 
 from ..archive import open_archive
 from ..exceptions import ArchiveError, ContactpipeError, one_line
-from ..files import atomic_path
+from .._util.files import atomic_path
 from ..simulation import simulate
 from .inputs import scene_digest
 

@@ -37,9 +37,9 @@ import xarray as xr
 from ..archive import open_archive
 from ..archive.schema import scene_table
 from ..exceptions import ArchiveError, ContactpipeError, one_line
-from ..fatigue import fatigue
-from ..files import atomic_path, check_output_path, make_folder
-from ..stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
+from ..post.fatigue import fatigue
+from .._util.files import atomic_path, check_output_path, make_folder
+from ..post.stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
 from .config import StressSpec
 from .plot import plot_stress, save_figure
 
@@ -266,7 +266,7 @@ def write_stress_product(archive, target, spec: StressSpec) -> dict:
     it is. The work runs on dask's synchronous scheduler (one block in memory at a time,
     and never on a distributed client the process may hold), with small HDF5 chunk caches
     (:data:`CHUNK_CACHE_BYTES`): the memory is about one block of
-    :data:`contactpipe.stress.BLOCK_BYTES` and one depth of the criterion's history,
+    :data:`contactpipe.post.stress.BLOCK_BYTES` and one depth of the criterion's history,
     whatever the size of the archive.
 
     Returns

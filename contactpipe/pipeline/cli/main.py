@@ -39,8 +39,8 @@ import warnings
 from .._version import __version__
 from ..exceptions import (ArchiveError, ContactpipeError, OutputPathError, ResumeNotice,
                           SceneError, one_line)
-from ..files import LockedError, check_output_path, make_folder
-from ..interrupts import deferred, pending, raise_if_signalled, signals_as_interrupt
+from .._util.files import LockedError, check_output_path, make_folder
+from .._util.interrupts import deferred, pending, raise_if_signalled, signals_as_interrupt
 
 __all__ = ["main", "build_parser"]
 

@@ -57,7 +57,7 @@ import numpy as np
 
 from .. import analytic
 from ..exceptions import ArchiveError, SceneError
-from ..fretting import loop_cycles
+from ..post.fretting import loop_cycles
 from ..materials import composite_modulus
 from ..planning import pair_couples
 from .inputs import scene_of
@@ -438,7 +438,7 @@ class ClosedForm:
 
     def displacement_cycles(self):
         """(start, stop) archive instants of each closed cycle of the imposed displacement
-        (:func:`contactpipe.fretting.loop_cycles`)."""
+        (:func:`contactpipe.post.fretting.loop_cycles`)."""
         return loop_cycles(self.displacement)
 
     def history(self, k):

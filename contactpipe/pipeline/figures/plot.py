@@ -54,11 +54,11 @@ import xarray as xr
 
 from .. import analytic
 from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line
-from ..files import atomic_path, check_output_dir, check_output_path, make_folder
-from ..interrupts import raise_if_signalled
+from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from .._util.interrupts import raise_if_signalled
 from ..materials import composite_modulus
 from ..nomenclature import VARIABLES
-from ..stress import is_stress_file, open_stress
+from ..post.stress import is_stress_file, open_stress
 from .combine import MANIFEST, open_sweep
 from .compare import load_dataset
 from .figures import DPI, FIGSIZE, axes_of, new_figure
@@ -103,7 +103,7 @@ def save_figure(fig, path) -> pathlib.Path:
     """Write ``fig`` as a PNG (800 x 500 pixels for a figure of :func:`new_figure`).
 
     The one place figures are written: the path is checked first
-    (:func:`contactpipe.files.check_output_path`: not empty, not a directory, not a
+    (:func:`contactpipe._util.files.check_output_path`: not empty, not a directory, not a
     device), its folder is created, and the file is written atomically.
 
     Returns
@@ -132,7 +132,7 @@ def save_figure(fig, path) -> pathlib.Path:
 
 def input_kind(path) -> str:
     """What a figure input is: ``"sweep"`` (a folder), ``"stress"`` (a netCDF file holding
-    a stress field, :func:`contactpipe.stress.is_stress_file`) or ``"archive"`` (anything
+    a stress field, :func:`contactpipe.post.stress.is_stress_file`) or ``"archive"`` (anything
     else; opening it says when it is not one)."""
     path = pathlib.Path(path)
     if path.is_dir():
@@ -145,7 +145,7 @@ def open_input(path, expect: str | None = None):
     """Open a figure input: yields (kind, Dataset) and closes it after.
 
     An archive is opened verified (:func:`contactpipe.open_archive`), a stress file
-    verified too (:func:`contactpipe.stress.open_stress`: NaN, inf and checksum errors
+    verified too (:func:`contactpipe.post.stress.open_stress`: NaN, inf and checksum errors
     refused), a sweep folder by :func:`open_sweep`; all lazily.
 
     Raises

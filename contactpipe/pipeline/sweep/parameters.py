@@ -17,7 +17,7 @@ the sweep applies it to every member (:mod:`contactpipe.pipeline.members`). Buil
 ``delta_ratio``
     The same amplitude given as delta*/delta_gs [1], delta_gs = 3 mu W C / (16 a) the
     member's own closed-form partial / gross slip boundary
-    (:func:`contactpipe.fretting.closed_form_boundary`: a sphere, elastic or rigid bodies,
+    (:func:`contactpipe.post.fretting.closed_form_boundary`: a sphere, elastic or rigid bodies,
     a scalar mu > 0, a constant normal force), after the dotted axes are applied (so a
     swept mu or W moves delta_gs with it).
 
@@ -30,7 +30,7 @@ import numbers
 from collections.abc import Callable
 
 from ..exceptions import SceneError
-from ..fretting import closed_form_boundary
+from ..post.fretting import closed_form_boundary
 
 __all__ = ["register_parameter", "derived_parameters", "registered", "relaxation_time",
            "with_window", "tau_ratio", "with_amplitude", "delta_amplitude", "delta_ratio"]
@@ -181,7 +181,7 @@ def delta_amplitude(scene, value):
 @register_parameter("delta_ratio")
 def delta_ratio(scene, value):
     """Displacement amplitude delta* = ``value`` x delta_gs, the member's closed-form
-    partial / gross slip boundary (:func:`contactpipe.fretting.closed_form_boundary`)."""
+    partial / gross slip boundary (:func:`contactpipe.post.fretting.closed_form_boundary`)."""
     ratio = _positive("delta_ratio", value)
     d_gs, why = closed_form_boundary(scene)
     if not math.isfinite(d_gs):

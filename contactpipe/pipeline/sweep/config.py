@@ -1,6 +1,6 @@
 """The pipeline's configuration files: the sweep file and the pipeline file.
 
-Both are read by the table-driven reader of :mod:`contactpipe.tables`, as the scene is:
+Both are read by the table-driven reader of :mod:`contactpipe.scene.tables`, as the scene is:
 each table is described by data (:data:`SWEEP_FIELDS`, :data:`DASK_FIELDS`,
 :data:`PIPELINE_FIELDS`, ...), unknown keys get a "did you mean", and every problem of a
 file is reported at once in one :class:`~contactpipe.SceneError`, each naming the file,
@@ -54,13 +54,13 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..exceptions import SceneError
-from ..fatigue import CRITERIA
-from ..files import read_toml
+from ..post.fatigue import CRITERIA
+from .._util.files import read_toml
 from ..nomenclature import SERIES, VARIABLES
 from ..scene import Scene
-from ..scene_parts import MAX_SIDE
-from ..stress import BODIES, MAX_DEPTH_SIDES
-from ..tables import Field, Reader, did_you_mean, nesting_depth, show
+from ..scene.parts import MAX_SIDE
+from ..post.stress import BODIES, MAX_DEPTH_SIDES
+from ..scene.tables import Field, Reader, did_you_mean, nesting_depth, show
 from .members import MODES
 
 __all__ = ["SweepFile", "PipelineSpec", "StressSpec", "read_sweep_file", "load_sweep_file",
@@ -137,7 +137,7 @@ _PA = "a finite number > 0 [Pa]"
 LIMIT_RANGE = (1e3, 1e12)
 _LIMIT = f"a number from {LIMIT_RANGE[0]:g} to {LIMIT_RANGE[1]:g} [Pa]"
 #: The criteria's constants (:func:`contactpipe.fatigue`); which apply to which criterion
-#: is read from :data:`contactpipe.fatigue.CRITERIA`.
+#: is read from :data:`contactpipe.post.fatigue.CRITERIA`.
 CONSTANT_FIELDS = (
     Field("torsion_limit", "number", _LIMIT + ", the fully reversed torsion fatigue limit",
           ok=lambda x: LIMIT_RANGE[0] <= x <= LIMIT_RANGE[1], unit="Pa"),

@@ -79,7 +79,7 @@ Figures are drawn by :mod:`contactpipe.pipeline.plot` and written by its
 Cron-safe
 ---------
 A run holds an exclusive lock on ``out/.pipeline.lock``
-(:func:`contactpipe.files.exclusive_lock`, non-blocking);
+(:func:`contactpipe._util.files.exclusive_lock`, non-blocking);
 a second run that finds it held exits at once with status 3 and one line on stderr
 ("another pipeline run holds the lock ..."), doing nothing. The lock dies with its
 process, so a killed run never blocks the next one, and the next one resumes where it
@@ -104,7 +104,7 @@ from tqdm.auto import tqdm
 
 from ..exceptions import ArchiveError, ContactpipeError
 from ..exceptions import one_line as _one_line
-from ..files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
+from .._util.files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
                      make_folder, utc_now as _now, write_json as _write_json)
 from . import compare as compare_stage, plot as plot_stage, stress_cmd as stress_stage
 from .combine import open_sweep
