@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.image import imread
 
 import contactpipe as cp
-from contactpipe.pipeline import plot
+from contactpipe.pipeline.figures import plot
 from contactpipe.pipeline.inputs import centre_rows
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.exceptions import ArchiveError

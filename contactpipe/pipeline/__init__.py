@@ -1,7 +1,7 @@
 """The pipeline stages: sweeps on dask, comparison, figures, batch runs and the command line.
 
 They read and write archives (:mod:`contactpipe.archive`); only the speed figures
-(:mod:`~contactpipe.pipeline.bench`) reach into the solver. Modules, from the top down
+(:mod:`~contactpipe.pipeline.cli.bench`) reach into the solver. Modules, from the top down
 (imports flow down only: pyproject's import-linter contract keeps it so):
 
 ``cli``          the ``contactpipe`` command: one sub-command per stage module below
@@ -12,7 +12,7 @@ They read and write archives (:mod:`contactpipe.archive`); only the speed figure
 ``bench``        ``contactpipe bench``: speed figures
 ``stress_cmd``   ``contactpipe stress`` and the pipeline's ``[stress]`` product
 ``plot``         figures: functions take ``ax=``/``fig=`` and return the Figure;
-                 :func:`~contactpipe.pipeline.plot.save_figure` writes them; inputs
+                 :func:`~contactpipe.pipeline.figures.plot.save_figure` writes them; inputs
                  (an archive, a stress file, a sweep folder) opened one way
 ``plot_stress``  the panels of the ``stress`` figure (x1-x3 section, surface map)
 ``plot_fretting`` the ``fretting-map`` figure (regimes over delta* and mu or W) and the

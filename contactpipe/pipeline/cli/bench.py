@@ -62,11 +62,11 @@ import time
 
 import numpy as np
 
-from ..exceptions import SceneError
-from .._util.files import check_output_path, write_text
-from ..scene import Scene
-from ..simulation import simulate
-from ..solver.convolution import Convolver
+from ...exceptions import SceneError
+from ..._util.files import check_output_path, write_text
+from ...scene import Scene
+from ...simulation import simulate
+from ...solver.convolution import Convolver
 
 __all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
            "table_rows", "write_table", "default_table_path"]

@@ -1,13 +1,13 @@
 """Compare an archive with the closed form its scene admits, or with another archive.
 
 ``compare(archive)`` checks a simulation against the closed-form solution of its scene
-(:func:`contactpipe.pipeline.reference.closed_form_for` says which one applies, the
-module :mod:`contactpipe.pipeline.reference` lists the closed forms and their
+(:func:`contactpipe.pipeline.compare.reference.closed_form_for` says which one applies, the
+module :mod:`contactpipe.pipeline.compare.reference` lists the closed forms and their
 conditions); ``compare(archive, reference)`` interpolates a reference archive onto the
 archive's instants and cells and compares every variable the two share. Either way the
 result is an error table, an :class:`xarray.Dataset` over ``time`` (written as netCDF or
 CSV by :func:`write_table`). The command line (``contactpipe compare``) is
-:mod:`contactpipe.pipeline.compare_cli`.
+:mod:`contactpipe.pipeline.cli.compare`.
 
 Error variables (over ``time`` unless said otherwise): ``err_p_max``, ``err_p_rms``,
 ``err_contact_radius``, ``err_omega3`` for every closed form (Lee-Radok under a growing
@@ -44,10 +44,10 @@ import dask
 import numpy as np
 import xarray as xr
 
-from ..archive import open_archive
-from ..exceptions import ArchiveError
-from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
-from .inputs import grid_of, radius_of_area, scene_of
+from ...archive import open_archive
+from ...exceptions import ArchiveError
+from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from ..inputs import grid_of, radius_of_area, scene_of
 from .reference import LOADING_FORMS, closed_form_solution
 
 __all__ = ["compare", "load_dataset", "write_table", "format_table", "check_table_path",
@@ -670,7 +670,7 @@ def compare(archive, reference=None, *, out=None) -> xr.Dataset:
     archive : path or xarray.Dataset
         The archive to check.
     reference : path or xarray.Dataset, optional
-        None: the closed form :func:`~contactpipe.pipeline.reference.closed_form_for`
+        None: the closed form :func:`~contactpipe.pipeline.compare.reference.closed_form_for`
         chooses. An archive: it is interpolated onto ``archive``'s instants (on
         ``t_norm`` = (t - t0)/window when the two windows differ) and cells (linearly;
         status by nearest cell), and every variable the two share is compared (solver
@@ -699,7 +699,7 @@ def compare(archive, reference=None, *, out=None) -> xr.Dataset:
 
     See Also
     --------
-    contactpipe.pipeline.plot.plot_profiles : the profiles against the closed form or
+    contactpipe.pipeline.figures.plot.plot_profiles : the profiles against the closed form or
         the reference (``reference=``).
     """
     if out is not None:

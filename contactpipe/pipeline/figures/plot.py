@@ -19,10 +19,10 @@ apply to the input is one line on stderr and exit status 2, nothing written.
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
 - :func:`plot_fretting_map`: the regime of each member of a fretting sweep over the
   displacement amplitude and mu or W, with the closed-form boundary
-  (:mod:`contactpipe.pipeline.plot_fretting`); :func:`plot_energy_ratio` its energy ratios.
+  (:mod:`contactpipe.pipeline.figures.fretting`); :func:`plot_energy_ratio` its energy ratios.
 - :func:`plot_stress`: a stress field or fatigue criterion (von Mises, or the criterion's
   main field when the file holds one) on the x1-x3 plane through the centre and on the
-  surface (:mod:`contactpipe.pipeline.plot_stress` draws the panels).
+  surface (:mod:`contactpipe.pipeline.figures.stress` draws the panels).
 - :func:`standard_figures`: every figure that applies to an archive, written to a folder.
 
 Every plotting function draws into the axes it is given (``ax=``, or ``fig=`` for the
@@ -51,20 +51,20 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from .. import analytic
-from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line
-from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
-from .._util.interrupts import raise_if_signalled
-from ..materials import composite_modulus
-from ..nomenclature import VARIABLES
-from ..post.stress import is_stress_file, open_stress
-from .combine import MANIFEST, open_sweep
-from .compare import load_dataset
-from .figures import DPI, FIGSIZE, axes_of, new_figure
-from .plot_fretting import plot_energy_ratio, plot_fretting_map
-from .inputs import centre_rows, grid_of, radius_of_area, scene_of
-from .plot_stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
-from .reference import ClosedForm, closed_form_for, closed_form_solution
+from ... import analytic
+from ...exceptions import ArchiveError, ContactpipeError, SceneError, one_line
+from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from ..._util.interrupts import raise_if_signalled
+from ...materials import composite_modulus
+from ...nomenclature import VARIABLES
+from ...post.stress import is_stress_file, open_stress
+from ..sweep.combine import MANIFEST, open_sweep
+from ..compare import load_dataset
+from .canvas import DPI, FIGSIZE, axes_of, new_figure
+from .fretting import plot_energy_ratio, plot_fretting_map
+from ..inputs import centre_rows, grid_of, radius_of_area, scene_of
+from .stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
+from ..compare.reference import ClosedForm, closed_form_for, closed_form_solution
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
            "plot_stress", "plot_stress_section", "plot_stress_surface", "plot_fretting_map",
@@ -413,7 +413,7 @@ def plot_profiles(ds, instants=None, *, closed_form=True, reference=None, fig=No
         included.
     closed_form : bool
         Draw the closed form (black dashes, on top) where
-        :func:`contactpipe.pipeline.reference.closed_form_for` gives one.
+        :func:`contactpipe.pipeline.compare.reference.closed_form_for` gives one.
     reference : xarray.Dataset or path, optional
         A reference archive drawn (black dots) instead of the closed form, at its instants
         nearest in t_norm = (t - t0)/window.

@@ -10,13 +10,13 @@
 The stage is in several modules, this one the entry point (every public name of the
 stage can be imported from here):
 
-- :mod:`~contactpipe.pipeline.parameters`: derived parameters (``tau_ratio``,
+- :mod:`~contactpipe.pipeline.sweep.parameters`: derived parameters (``tau_ratio``,
   :func:`register_parameter`);
-- :mod:`~contactpipe.pipeline.members`: axes parsed into members, each a validated scene;
-- :mod:`~contactpipe.pipeline.manifest`: ``manifest.json``, written and validated;
-- :mod:`~contactpipe.pipeline.execute`: where the members run and where their archives
+- :mod:`~contactpipe.pipeline.sweep.members`: axes parsed into members, each a validated scene;
+- :mod:`~contactpipe.pipeline.sweep.manifest`: ``manifest.json``, written and validated;
+- :mod:`~contactpipe.pipeline.sweep.execute`: where the members run and where their archives
   are written;
-- :mod:`~contactpipe.pipeline.combine`: :func:`open_sweep`;
+- :mod:`~contactpipe.pipeline.sweep.combine`: :func:`open_sweep`;
 - this module: :func:`sweep` (resuming included) and the command line.
 
 Axes
@@ -26,7 +26,7 @@ An axis name is either a dotted path into the scene (``"friction.mu"``,
 :meth:`Scene.replace`) or a *derived parameter* registered by name: ``tau_ratio`` (the
 load window as a multiple of the relaxation time), ``delta_amplitude`` and ``delta_ratio``
 (the amplitude of a displacement-controlled tangential program, in metres or over the
-gross-slip displacement); each is documented in :mod:`contactpipe.pipeline.parameters`.
+gross-slip displacement); each is documented in :mod:`contactpipe.pipeline.sweep.parameters`.
 
 Users register their own with :func:`register_parameter`, or give an axis as
 ``(values, func)`` for an ad-hoc one; ``func(scene, value)`` returns the new
@@ -45,7 +45,7 @@ Files in ``out_dir``
 ``manifest.json``
     Axes, mode, dimension names, the base scene (TOML) and, per member, its axis values,
     digest, file, status (``done`` / ``failed`` with a one-line error / ``pending``) and
-    wall time (:mod:`~contactpipe.pipeline.manifest`). Rewritten atomically as members
+    wall time (:mod:`~contactpipe.pipeline.sweep.manifest`). Rewritten atomically as members
     finish; checked on every read, so a manifest edited by hand is refused with one line
     naming the key instead of a bare KeyError.
 ``.sweep.lock``
@@ -90,7 +90,7 @@ The workers need not share the client's disk: with ``shared_disk=None`` (the def
 the workers of a LocalCluster (or of ``"synchronous"``) write the archives into
 ``out_dir`` themselves, and those of any other cluster simulate into a temporary folder
 of their own and send the archive back, which the client checks and writes
-(:mod:`~contactpipe.pipeline.execute`; ``shared_disk=True`` lets the workers of a shared
+(:mod:`~contactpipe.pipeline.sweep.execute`; ``shared_disk=True`` lets the workers of a shared
 filesystem write in place and spares the transfer).
 
 **A scheduler address is trusted code.** dask's protocol unpickles what the scheduler
@@ -131,17 +131,17 @@ import stat
 import sys
 import time
 
-from ..planning.accuracy import resolve_accuracy
-from ..archive import open_archive
-from ..exceptions import ArchiveError, SceneError, one_line
-from .._util.files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
+from ...planning.accuracy import resolve_accuracy
+from ...archive import open_archive
+from ...exceptions import ArchiveError, SceneError, one_line
+from ..._util.files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
                      make_folder)
-from ..planning import check_time, estimate_resources
-from ..scene import Scene
+from ...planning import check_time, estimate_resources
+from ...scene import Scene
 from .combine import open_member, open_sweep
 from .config import SweepFile, load_sweep_file, read_sweep_file
 from .execute import SYNCHRONOUS, execute
-from .inputs import scene_digest
+from ..inputs import scene_digest
 from .manifest import (MANIFEST, new_manifest, previous_records, read_manifest,
                        write_manifest)
 from .members import MODES, Member, build_members, dim_names, label_of
