@@ -23,20 +23,15 @@ def test_import_layers_are_kept():
 MAX_MODULE_LINES = 700
 MAX_FUNCTION_LINES = 80
 #: Over the caps today, pending their own refactor: none may grow. solver/ is being
-#: reworked apart from the layout (issue 41); the others are long docstrings around one
-#: algorithm each.
+#: reworked apart from the layout (issue 41), and simulate() is left to be split with it
+#: (march.py's calls into the solver change there).
 OVER_MODULE_CAP = {"contactpipe/solver/cg.py": 898}
 OVER_FUNCTION_CAP = {
     "contactpipe/solver/cg.py:box_cg": 120, "contactpipe/solver/coupling.py:solve_instant": 118,
     "contactpipe/solver/cg.py:project_rows": 105,
     "contactpipe/solver/joint.py:solve_joint_vector": 97,
     "contactpipe/solver/joint.py:solve_joint": 89, "contactpipe/solver/disk_cg.py:disk_cg": 88,
-    "contactpipe/post/fatigue.py:min_ball": 110,
-    "contactpipe/pipeline/sweep/driver.py:sweep": 103,
     "contactpipe/simulation/march.py:simulate": 92,
-    "contactpipe/pipeline/compare/tables.py:_compare_archives": 90,
-    "contactpipe/planning/resources.py:estimate_resources": 88,
-    "contactpipe/pipeline/figures/regimes.py:fretting_map": 83,
 }
 
 

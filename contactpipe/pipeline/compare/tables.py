@@ -397,6 +397,24 @@ def _scale(ds, ref, name, floors) -> float:
     return s if s > 0 and np.isfinite(s) else 1.0
 
 
+def _radius_errors(ds, ref_series, floors, cell_side) -> dict:
+    """The contact radius's relative error and the stick radius's error in cells, per
+    instant, from the areas of ``ds`` and the reference's areas at its instants."""
+    a_floor = NOISE * math.sqrt(floors["m2"] / math.pi)
+    cols = {}
+    for area, name, rel in (("contact_area", "err_contact_radius", True),
+                            ("stick_area", "err_stick_radius_cells", False)):
+        if area in ref_series:
+            mine = np.asarray(ds[area].values, float)
+            out = np.full(mine.size, np.nan)
+            for k in range(mine.size):
+                if np.isfinite(ref_series[area][k]):
+                    a, b = radius_of_area(mine[k]), radius_of_area(ref_series[area][k])
+                    out[k] = _rel(a, b, a_floor) if rel else abs(a - b) / cell_side
+            cols[name] = out
+    return cols
+
+
 def _compare_archives(ds, ref, label, ref_label):
     shared = [v for v in ds.data_vars if v in ref.data_vars and v not in DIAGNOSTICS]
     fields = [v for v in shared if ds[v].dims == FIELD and ref[v].dims == FIELD]
@@ -462,17 +480,7 @@ def _compare_archives(ds, ref, label, ref_label):
                                   (1 - w[2]) * vals[w[0]] + w[2] * vals[w[1]] for w in where])
         mine = np.asarray(ds[v].values, float)
         cols[f"err_{v}"] = np.abs(mine - ref_series[v]) / scales[v]
-    a_floor = NOISE * math.sqrt(floors["m2"] / math.pi)
-    for area, name, rel in (("contact_area", "err_contact_radius", True),
-                            ("stick_area", "err_stick_radius_cells", False)):
-        if area in ref_series:
-            mine = np.asarray(ds[area].values, float)
-            out = np.full(nt, np.nan)
-            for k in range(nt):
-                if np.isfinite(ref_series[area][k]):
-                    a, b = radius_of_area(mine[k]), radius_of_area(ref_series[area][k])
-                    out[k] = _rel(a, b, a_floor) if rel else abs(a - b) / math.sqrt(d1 * d2)
-            cols[name] = out
+    cols.update(_radius_errors(ds, ref_series, floors, math.sqrt(d1 * d2)))
     scalars = {}
     if "dissipation" in ref_series:
         last = [k for k in range(nt) if where[k] is not None][-1]

@@ -46,6 +46,25 @@ COLUMNS = (
 )
 
 
+def _classified(sweep_dir, done):
+    """[(member, its FrettingRegime)] of the finished members, and the set of their
+    boundary constants (:func:`boundary_constants`)."""
+    rows, constants = [], set()
+    for m in done:
+        ds = open_member(sweep_dir, m)
+        try:
+            try:
+                r = fretting_regime(ds)
+            except ArchiveError as err:
+                raise ArchiveError(f"sweep member {label_of(m['values'])} ({m['file']}): "
+                                   f"{err}") from None
+            constants.add(boundary_constants(scene_of(ds)))
+        finally:
+            ds.close()
+        rows.append((m, r))
+    return rows, constants
+
+
 def fretting_map(sweep_dir) -> xr.Dataset:
     """Classify every finished member of a fretting sweep.
 
@@ -77,19 +96,7 @@ def fretting_map(sweep_dir) -> xr.Dataset:
     if not done:
         raise ArchiveError(f"{sweep_dir}: no member of the sweep is done; run the sweep "
                            f"first")
-    rows, constants = [], set()
-    for m in done:
-        ds = open_member(sweep_dir, m)
-        try:
-            try:
-                r = fretting_regime(ds)
-            except ArchiveError as err:
-                raise ArchiveError(f"sweep member {label_of(m['values'])} ({m['file']}): "
-                                   f"{err}") from None
-            constants.add(boundary_constants(scene_of(ds)))
-        finally:
-            ds.close()
-        rows.append((m, r))
+    rows, constants = _classified(sweep_dir, done)
     data = {}
     values = {
         "mu": [r.friction_coefficient for _, r in rows],

@@ -413,43 +413,53 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
     _refuse_in_reimport()
     t0 = time.perf_counter()
     out_dir = check_output_dir(out_dir, "sweep output folder", inputs=_paths(base))
-    if not isinstance(base, Scene):
-        base = Scene.from_toml(base)
+    base = base if isinstance(base, Scene) else Scene.from_toml(base)
     names, values, funcs, members = build_members(base, axes, mode)
     _check_run_times(members)
     out_dir = out_dir.resolve()
     make_folder(out_dir)
     with exclusive_lock(out_dir / LOCK, "sweep", error=SweepLockedError):
-        _clean_temporaries(out_dir, members)
-        by_digest: dict[str, list] = {}
-        for m in members:
-            by_digest.setdefault(m.digest, []).append(m)
-        previous, created = previous_records(out_dir)
-        jobs, skipped, set_aside = _resume(out_dir, by_digest, previous)
-        manifest = new_manifest(base, mode, names, values, funcs, dim_names(names),
-                                members, created)
-        write_manifest(out_dir, manifest)
-        computed, failed = [], []
-
-        def on_done(res):
-            group = by_digest[res["digest"]]
-            for m in group:
-                m.status = res["status"]
-                m.error = res.get("error")
-                m.wall_time_s = res.get("wall_time_s")
-                m.cpu_time_s = res.get("cpu_time_s")
-            (computed if res["status"] == "done" else failed).extend(group)
-            write_manifest(out_dir, manifest, members)
-
-        execute(jobs, client=client, scheduler=scheduler, n_workers=n_workers,
-                threads_per_worker=threads_per_worker, progress=progress,
-                retries=int(retries or 0), shared_disk=shared_disk, on_done=on_done)
-    order = {id(m): m.index for m in members}
-    for lst in (computed, failed, skipped):
-        lst.sort(key=lambda m: order[id(m)])
+        manifest, computed, failed, skipped, set_aside = _run_members(
+            out_dir, members, (base, mode, names, values, funcs), client=client,
+            scheduler=scheduler, n_workers=n_workers, threads_per_worker=threads_per_worker,
+            progress=progress, retries=int(retries or 0), shared_disk=shared_disk)
     return SweepResult(out_dir=out_dir, manifest=manifest, members=members,
                        computed=computed, skipped=skipped, failed=failed,
                        wall_time_s=time.perf_counter() - t0, set_aside=set_aside)
+
+
+def _run_members(out_dir, members, new_manifest_args, **execute_kw):
+    """Under the folder's lock: clear what a killed sweep left, resume from the previous
+    manifest, write the new one, and run the members still to do, recording each in the
+    manifest as it ends. Returns (manifest, computed, failed, skipped, set_aside), each
+    list in sweep order."""
+    _clean_temporaries(out_dir, members)
+    by_digest: dict[str, list] = {}
+    for m in members:
+        by_digest.setdefault(m.digest, []).append(m)
+    previous, created = previous_records(out_dir)
+    jobs, skipped, set_aside = _resume(out_dir, by_digest, previous)
+    base, mode, names, values, funcs = new_manifest_args
+    manifest = new_manifest(base, mode, names, values, funcs, dim_names(names),
+                            members, created)
+    write_manifest(out_dir, manifest)
+    computed, failed = [], []
+
+    def on_done(res):
+        group = by_digest[res["digest"]]
+        for m in group:
+            m.status = res["status"]
+            m.error = res.get("error")
+            m.wall_time_s = res.get("wall_time_s")
+            m.cpu_time_s = res.get("cpu_time_s")
+        (computed if res["status"] == "done" else failed).extend(group)
+        write_manifest(out_dir, manifest, members)
+
+    execute(jobs, on_done=on_done, **execute_kw)
+    order = {id(m): m.index for m in members}
+    for lst in (computed, failed, skipped):
+        lst.sort(key=lambda m: order[id(m)])
+    return manifest, computed, failed, skipped, set_aside
 
 
 def _paths(*objs) -> list:
