@@ -153,7 +153,8 @@ def test_digest_counts_physics_not_output():
 
 
 def test_digest_is_stable_across_processes():
-    code = ("import sys; from contactpipe._util.files import loads_toml; from contactpipe.scene import Scene; "
+    code = ("import sys; from contactpipe._util.files import loads_toml; "
+            "from contactpipe.scene import Scene; "
             "print(Scene.from_dict(loads_toml(sys.stdin.read())).digest())")
     out = subprocess.run([sys.executable, "-c", code], input=TINY_FRETTING, text=True,
                          capture_output=True, cwd=REPO, check=True,

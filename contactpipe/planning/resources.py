@@ -205,7 +205,8 @@ AUTO_PRELOAD_GUESS = 32
 
 def _preload_substeps(setting) -> int:
     """Sub-step solves of a frictional preload: its n, and the coarser paths of its error
-    estimate (n/4 and n/2; 2, 4, ..., n/2 for "auto"; :func:`contactpipe.planning.accuracy.choose_preload`)."""
+    estimate (n/4 and n/2; 2, 4, ..., n/2 for "auto";
+    :func:`contactpipe.planning.accuracy.choose_preload`)."""
     if setting == "auto":
         return 2 * AUTO_PRELOAD_GUESS
     n = int(setting)

@@ -47,10 +47,14 @@ __all__ = ["main", "build_parser"]
 STAGES = {
     # name: (module, one-line help)
     "sweep": ("contactpipe.pipeline.sweep.driver", "run a parameter sweep on dask (resumable)"),
-    "compare": ("contactpipe.pipeline.cli.compare", "compare archives with closed forms or each other"),
-    "plot": ("contactpipe.pipeline.figures.plot", "figures of an archive, a stress file or a sweep folder"),
-    "pipeline": ("contactpipe.pipeline.cli.run", "sweep -> compare -> plot (-> stress), idempotent, cron-safe"),
-    "bench": ("contactpipe.pipeline.cli.bench", "print solver speed figures (FFT pairs, iterations, time)"),
+    "compare": ("contactpipe.pipeline.cli.compare",
+                "compare archives with closed forms or each other"),
+    "plot": ("contactpipe.pipeline.figures.plot",
+             "figures of an archive, a stress file or a sweep folder"),
+    "pipeline": ("contactpipe.pipeline.cli.run",
+                 "sweep -> compare -> plot (-> stress), idempotent, cron-safe"),
+    "bench": ("contactpipe.pipeline.cli.bench",
+              "print solver speed figures (FFT pairs, iterations, time)"),
     "stress": ("contactpipe.pipeline.cli.stress",
                "subsurface stress field of an archive (DC-FFT per depth)"),
 }
@@ -99,7 +103,8 @@ def _run(args) -> int:
           f"{float(ds.attrs['wall_time_s']):.2f} s)")
     if figure is not None:
         raise_if_signalled()             # a signal came after the archive: no figure
-        from ..figures.plot import plot_profiles, save_figure  # matplotlib: only when a figure is asked
+        # matplotlib: only when a figure is asked
+        from ..figures.plot import plot_profiles, save_figure
         make_folder(figure.parent)
         save_figure(plot_profiles(ds), figure)
         print(f"wrote {figure}")

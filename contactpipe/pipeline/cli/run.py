@@ -4,9 +4,9 @@
 [--shared-disk | --no-shared-disk] [--no-progress]``
 runs the sweep of the file (on dask, resumable: :mod:`contactpipe.pipeline.sweep`), compares every
 member with its closed form or a reference archive (:mod:`contactpipe.pipeline.compare`), draws the
-standard figures of every member and an overlay of the sweep (:mod:`contactpipe.pipeline.figures.plot`),
-computes the subsurface stress of every member when the file asks for it
-(:mod:`contactpipe.pipeline.cli.stress`), and writes a summary.
+standard figures of every member and an overlay of the sweep
+(:mod:`contactpipe.pipeline.figures.plot`), computes the subsurface stress of every member
+when the file asks for it (:mod:`contactpipe.pipeline.cli.stress`), and writes a summary.
 
 Pipeline file::
 

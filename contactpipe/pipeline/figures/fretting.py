@@ -38,7 +38,8 @@ def _table(obj):
     if isinstance(obj, xr.Dataset):
         if "regime" not in obj:
             raise ArchiveError("the dataset is not a regime table (no 'regime'); give a "
-                               "sweep folder or contactpipe.pipeline.figures.regimes.fretting_map()")
+                               "sweep folder or "
+                               "contactpipe.pipeline.figures.regimes.fretting_map()")
         return obj
     if isinstance(obj, (str, os.PathLike)):
         return fretting_map(obj)

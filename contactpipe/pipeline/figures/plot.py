@@ -56,7 +56,10 @@ from .fretting import plot_energy_ratio, plot_fretting_map
 from ..inputs import centre_rows, grid_of, scene_of
 from .stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
 
-from .common import (INPUTS, KINDS, input_kind, open_input, _opened, _dataset, has_tangential_load, figure_applies, _time_label, _scales, _profile, _index, _default_instants, _solution, _scene_title, CLOSED_STYLE)
+from .common import (INPUTS, KINDS, input_kind, open_input, _opened, _dataset,
+                     has_tangential_load, figure_applies, _time_label,
+                     _scales, _profile, _index, _default_instants,
+                     _solution, _scene_title, CLOSED_STYLE)
 from .series import plot_hysteresis, plot_radii
 from .sweeps import plot_sweep
 
