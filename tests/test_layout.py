@@ -110,6 +110,19 @@ def test_old_path_warns_and_is_the_new_module(old):
     assert all(getattr(sys.modules[old], n) is getattr(new, n) for n in names)
 
 
+def test_old_path_as_an_attribute_of_the_package_warns_at_the_caller():
+    """``cp.geometry`` (or ``from contactpipe import geometry``) imports the old path
+    through the package's ``__getattr__``: the warning still names the caller's line."""
+    import contactpipe as cp
+    new = importlib.import_module("contactpipe.scene.geometry")
+    sys.modules.pop("contactpipe.geometry", None)
+    vars(cp).pop("geometry", None)
+    with pytest.warns(DeprecationWarning, match="contactpipe.geometry has moved") as rec:
+        old = getattr(cp, "geometry")
+    assert len(rec) == 1 and rec[0].filename == __file__
+    assert old is new
+
+
 def test_no_module_left_at_the_top_but_the_argued_ones():
     """At the package's top only __init__, _version, exceptions and the two modules kept
     by the decision record (D32: nomenclature, testing); every other file there is an old

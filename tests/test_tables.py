@@ -14,7 +14,7 @@ import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from contactpipe import scene_parts
+from contactpipe.scene import parts as scene_parts
 from contactpipe.exceptions import SceneError
 from contactpipe._util.files import loads_toml
 from contactpipe.pipeline.sweep import config
