@@ -96,12 +96,30 @@ MOVED = {
 }
 
 
+def _forget(old):
+    """Drop an old path from sys.modules and from its parent (where the import bound it):
+    the next import of it is a first one again, and warns."""
+    sys.modules.pop(old, None)
+    parent, leaf = old.rsplit(".", 1)
+    parent = sys.modules.get(parent)
+    if parent is not None and isinstance(vars(parent).get(leaf), type(sys)):
+        delattr(parent, leaf)
+
+
+@pytest.fixture
+def forget_old_paths():
+    """Other tests must see an old path afresh (pyproject makes its warning an error)."""
+    yield
+    for old in MOVED:
+        _forget(old)
+
+
 @pytest.mark.parametrize("old", sorted(MOVED))
-def test_old_path_warns_and_is_the_new_module(old):
+def test_old_path_warns_and_is_the_new_module(old, forget_old_paths):
     """Importing an old path warns once, at the importer's line, naming the new path;
     the module is the new one, so every name is the same object under both paths."""
     new = importlib.import_module(MOVED[old])
-    sys.modules.pop(old, None)                  # import it afresh, as a first import would
+    _forget(old)                                # import it afresh, as a first import would
     with pytest.warns(DeprecationWarning, match=f"{old} has moved to {MOVED[old]}") as rec:
         __import__(old)                         # no Python frame of its own: the caller's
     assert len(rec) == 1 and rec[0].filename == __file__
@@ -110,13 +128,12 @@ def test_old_path_warns_and_is_the_new_module(old):
     assert all(getattr(sys.modules[old], n) is getattr(new, n) for n in names)
 
 
-def test_old_path_as_an_attribute_of_the_package_warns_at_the_caller():
+def test_old_path_as_an_attribute_of_the_package_warns_at_the_caller(forget_old_paths):
     """``cp.geometry`` (or ``from contactpipe import geometry``) imports the old path
     through the package's ``__getattr__``: the warning still names the caller's line."""
     import contactpipe as cp
     new = importlib.import_module("contactpipe.scene.geometry")
-    sys.modules.pop("contactpipe.geometry", None)
-    vars(cp).pop("geometry", None)
+    _forget("contactpipe.geometry")
     with pytest.warns(DeprecationWarning, match="contactpipe.geometry has moved") as rec:
         old = getattr(cp, "geometry")
     assert len(rec) == 1 and rec[0].filename == __file__
