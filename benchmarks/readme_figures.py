@@ -24,7 +24,7 @@ average). ``--update-readme`` then rewrites the README's table between the marke
 repeat; the wall times are this machine's on that day (the "floor" column, the time of one
 FFT pair on the padded grid, measured beside each run, shows how fast it was, and
 "wall / floor", the wall time over pairs × floor, compares across days). The quantities
-keep ``contactpipe bench``'s names (its table's columns: ``contactpipe.pipeline.bench``).
+keep ``contactpipe bench``'s names (its table's columns: ``contactpipe.pipeline.cli.bench``).
 
 ``--quick``: 16² grids, 10 steps (the fretting loop and figure 3), 25 steps (memory): a
 smoke run of seconds; give ``--out``, so the checked-in file keeps the
@@ -54,7 +54,7 @@ FIELDS = ("case", "pair", "form", "grid", "steps", "quantity", "value")
 
 sys.path.insert(0, str(ROOT / "studies"))      # the study's own scene builder
 
-from contactpipe.pipeline import bench  # noqa: E402
+from contactpipe.pipeline.cli import bench  # noqa: E402
 from contactpipe.simulation import simulate  # noqa: E402
 
 FULL = dict(normal=[64, 128, 256, 512], fretting=[64, 128, 256], fretting_steps=40,

@@ -30,8 +30,8 @@ import numpy as np
 import matplotlib.pyplot as plt
 
 import contactpipe as cp
-from contactpipe.pipeline.plot_fretting import plot_energy_ratio, plot_fretting_map
-from contactpipe.pipeline.regimes import fretting_map, write_regime_table
+from contactpipe.pipeline.figures.fretting import plot_energy_ratio, plot_fretting_map
+from contactpipe.pipeline.figures.regimes import fretting_map, write_regime_table
 
 #: Displacement amplitudes [m] of the default map, and of the quick one.
 AMPLITUDES = [0.5e-6, 1e-6, 1.5e-6, 2e-6, 3e-6, 4e-6, 6e-6]

@@ -34,7 +34,7 @@ import time
 import numpy as np
 
 import contactpipe as cp
-from contactpipe.pipeline.plot_stress import plot_stress_section, plot_stress_surface
+from contactpipe.pipeline.figures.stress import plot_stress_section, plot_stress_surface
 
 BENDING_LIMIT = 600e6      # f_-1 [Pa], illustrative
 TORSION_LIMIT = 400e6      # t_-1 [Pa], illustrative

@@ -5,7 +5,8 @@ import math
 
 import pytest
 
-from contactpipe.pipeline import bench, cli
+from contactpipe.pipeline import cli
+from contactpipe.pipeline.cli import bench
 
 FIGURES = ("pairs_per_step", "ms_per_step", "pair_ms", "floor_ms_per_step",
            "wall_over_floor", "first_instant_pairs", "run_pairs", "run_s", "cpus")

@@ -13,7 +13,7 @@ import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.pipeline.compare import compare
-from contactpipe.pipeline.reference import closed_form_for, iwan_dissipation
+from contactpipe.pipeline.compare.reference import closed_form_for, iwan_dissipation
 from contactpipe.exceptions import ArchiveError, SceneError
 
 from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, fretting_scene, make_scene

@@ -1,4 +1,4 @@
-"""The compare stage on the general loading's closed forms (contactpipe.pipeline.reference:
+"""The compare stage on the general loading's closed forms (contactpipe.pipeline.compare.reference:
 hertz_tilted, lubkin_torsion, mindlin_displacement): which scenes they recognise, and the
 rows of the error table against the tests' own measured figures.
 
@@ -10,7 +10,7 @@ import pytest
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.pipeline.compare import compare, write_table
-from contactpipe.pipeline.reference import closed_form_for, closed_form_solution, diagnose
+from contactpipe.pipeline.compare.reference import closed_form_for, closed_form_solution, diagnose
 
 from helpers import A_HERTZ, MU, R, W, make_scene
 

@@ -15,9 +15,9 @@ from contactpipe import analytic as an
 from contactpipe.exceptions import ArchiveError, SceneError
 from contactpipe.post.fretting import classify_loop, fretting_regime, loop_cycles, turning_points
 from contactpipe.pipeline.cli import main as cli_main
-from contactpipe.pipeline.parameters import delta_amplitude, delta_ratio
-from contactpipe.pipeline.plot_fretting import plot_energy_ratio, plot_fretting_map
-from contactpipe.pipeline.regimes import fretting_map, write_regime_table
+from contactpipe.pipeline.sweep.parameters import delta_amplitude, delta_ratio
+from contactpipe.pipeline.figures.fretting import plot_energy_ratio, plot_fretting_map
+from contactpipe.pipeline.figures.regimes import fretting_map, write_regime_table
 
 from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, make_scene
 

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from contactpipe import geometry as g
+from contactpipe.scene import geometry as g
 from contactpipe.exceptions import SceneError
 from contactpipe.scene import Geometry, Grid
 

@@ -1,6 +1,6 @@
 """The pipeline's lowest modules: what the stages read from an archive
 (:mod:`contactpipe.pipeline.inputs`), the closed-form lookup
-(:mod:`contactpipe.pipeline.reference`) and the sweep's members and derived parameters."""
+(:mod:`contactpipe.pipeline.compare.reference`) and the sweep's members and derived parameters."""
 import math
 
 import numpy as np
@@ -9,9 +9,9 @@ import pytest
 import contactpipe as cp
 from contactpipe.exceptions import ArchiveError, SceneError
 from contactpipe.pipeline.inputs import grid_of, radius_of_area, scene_digest, scene_of
-from contactpipe.pipeline.members import build_members, dim_names
-from contactpipe.pipeline.parameters import registered
-from contactpipe.pipeline.reference import (cell_average_field, diagnose,
+from contactpipe.pipeline.sweep.members import build_members, dim_names
+from contactpipe.pipeline.sweep.parameters import registered
+from contactpipe.pipeline.compare.reference import (cell_average_field, diagnose,
                                             no_closed_form_message)
 from contactpipe.testing import tiny_scene
 

@@ -15,7 +15,7 @@ import contactpipe as cp
 from contactpipe.exceptions import OutputPathError
 from contactpipe._util.files import check_output_dir
 from contactpipe.pipeline import cli
-from contactpipe.pipeline.plot import save_figure
+from contactpipe.pipeline.figures.plot import save_figure
 from contactpipe.pipeline.sweep import sweep
 from contactpipe.scene import Scene
 from contactpipe.testing import TINY_SCENES
@@ -128,7 +128,7 @@ def test_refused_in_one_line_touching_nothing(study, name, argv, words):
 
 def _exit_status_of_an_output_path_error() -> int:
     """What the top-level command line returns when a stage raises OutputPathError."""
-    bench = importlib.import_module("contactpipe.pipeline.bench")
+    bench = importlib.import_module("contactpipe.pipeline.cli.bench")
     saved = bench.main
 
     def refuse(args):
@@ -162,7 +162,7 @@ def test_api_refusals(study, tmp_path):
         cp.compare(study / "run.nc", out=DEVNULL)
     with pytest.raises(OutputPathError, match="is the input file"):
         cp.compare(study / "run.nc", out=study / "run.nc")
-    from contactpipe.pipeline.plot import new_figure
+    from contactpipe.pipeline.figures.plot import new_figure
     with pytest.raises(OutputPathError, match="not a regular file"):
         save_figure(new_figure(), DEVNULL)
     with pytest.raises(OutputPathError, match="figure path is empty"):

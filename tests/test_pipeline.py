@@ -13,8 +13,8 @@ import pytest
 
 import contactpipe as cp
 from contactpipe.pipeline import cli
-from contactpipe.pipeline.config import read_pipeline_file
-from contactpipe.pipeline.run import PipelineLockedError, run_pipeline
+from contactpipe.pipeline.sweep.config import read_pipeline_file
+from contactpipe.pipeline.cli.run import PipelineLockedError, run_pipeline
 from contactpipe.post.stress import open_stress
 from contactpipe.testing import TINY_SCENES
 
@@ -89,8 +89,8 @@ def test_second_run_does_nothing_and_stale_products_are_redone(tmp_path, monkeyp
     assert not [k for k in before if ".part" in k or "-tmp" in k]
 
     # nothing changed: no solver, no compare, no figure runs; nothing is rewritten
-    compare = importlib.import_module("contactpipe.pipeline.compare")
-    plot = importlib.import_module("contactpipe.pipeline.plot")
+    compare = importlib.import_module("contactpipe.pipeline.compare.tables")
+    plot = importlib.import_module("contactpipe.pipeline.figures.plot")
     simulate = importlib.import_module("contactpipe.simulation")
     forbid(monkeypatch, compare, "compare")
     forbid(monkeypatch, plot, "plot_profiles", "plot_radii", "plot_sweep")
@@ -235,8 +235,8 @@ def test_stress_product_computed_once_then_when_its_inputs_change(tmp_path, monk
     before = stamps(out)
 
     # nothing changed: no stress work, nothing rewritten
-    stress_cmd = importlib.import_module("contactpipe.pipeline.stress_cmd")
-    plot = importlib.import_module("contactpipe.pipeline.plot")
+    stress_cmd = importlib.import_module("contactpipe.pipeline.cli.stress")
+    plot = importlib.import_module("contactpipe.pipeline.figures.plot")
     forbid(monkeypatch, stress_cmd, "write_stress_product")
     forbid(monkeypatch, plot, "plot_stress")
     second = run_pipeline(path, progress=False)
@@ -348,8 +348,8 @@ def test_the_example_pipeline_has_a_member_with_a_closed_form():
     steps, compares within the discretisation's error (measured: contact radius 4.7 %,
     approach 0.12 %; the example's 64 x 64 cells, 100 steps: 1.4 %, 0.018 %)."""
     from contactpipe.pipeline.compare import compare
-    from contactpipe.pipeline.members import build_members
-    from contactpipe.pipeline.reference import closed_form_for
+    from contactpipe.pipeline.sweep.members import build_members
+    from contactpipe.pipeline.compare.reference import closed_form_for
     spec = read_pipeline_file(EXAMPLES / "pipeline.toml")
     assert spec.reference == "closed_form" and "sweep" in spec.figures
     _, _, _, members = build_members(spec.base, spec.axes, spec.mode)

@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.image import imread
 
 import contactpipe as cp
-from contactpipe.pipeline import plot
+from contactpipe.pipeline.figures import plot, sweeps
 from contactpipe.pipeline.inputs import centre_rows
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.exceptions import ArchiveError
@@ -133,7 +133,7 @@ def test_sweep_along_mu(tmp_path):
     sw = xr.concat(members, dim=xr.DataArray([0.1, 0.12, 0.15], dims="mu", name="mu"),
                    combine_attrs="drop_conflicts")
     check_png(draw(plot.plot_sweep, sw, tmp_path / "s.png"))
-    assert plot._member_label(sw, {"mu": 1}) == "mu = 0.12"
+    assert sweeps._member_label(sw, {"mu": 1}) == "mu = 0.12"
     check_png(draw(plot.plot_sweep, sw, tmp_path / "d.png", variable="dissipation"))
     check_png(draw(plot.plot_sweep, sw, tmp_path / "p.png", variable="p"))     # max over x1, x2
     with pytest.raises(ArchiveError, match="not in the sweep"):
@@ -155,7 +155,7 @@ def test_sweep_on_t_norm(archives, tmp_path):
     # a zip sweep: one dimension "member", the axes as coordinates along it
     zipped = sw.rename(tau_ratio="member").drop_vars("member").assign_coords(
         tau_ratio=("member", [1.0, 2.0]), mu=("member", [0.0, 0.1]))
-    label = plot._member_label(zipped, {"member": 1})
+    label = sweeps._member_label(zipped, {"member": 1})
     assert sorted(label.split(", ")) == ["mu = 0.1", "tau_ratio = 2"]
     check_png(draw(plot.plot_sweep, zipped, tmp_path / "z.png", variable="W"))
 

@@ -126,3 +126,29 @@ def test_loose_coarser_paths_of_the_estimate(monkeypatch):
     assert abs(loose.attrs["preload_error_estimate"]
                - tight.attrs["preload_error_estimate"]) < 1e-6
     assert loose.attrs["preload_estimate_fft_pairs"] < tight.attrs["preload_estimate_fft_pairs"]
+
+
+def test_the_estimate_is_a_function_of_the_problem_not_a_mode_of_it():
+    """The preload estimate runs its coarser paths through the instant solver with an
+    explicit Path (sub-steps, limits, scratch): the problem has no mode to set or reset
+    (its attributes are the same before and after), and two estimates agree bit for bit
+    (8 sub-steps on the case above: an error estimate of 3.2 % of mu p_max)."""
+    from contactpipe.planning import plan
+    from contactpipe.simulation.march import _step
+    from contactpipe.simulation.problem import Grid, Operators, Problem
+
+    sc = scene(8)
+    pb = Problem(sc, plan(sc))
+    assert isinstance(pb.grid, Grid) and isinstance(pb.ops, Operators)
+    assert pb.grid.shape == (32, 32) and pb.grid.cell == pytest.approx(pb.grid.d1 * pb.grid.d2)
+    before = {k: v for k, v in vars(pb).items() if k != "ops"}
+    first = simulation.estimate(pb, _step)
+    second = simulation.estimate(pb, _step)
+    assert vars(pb).keys() == before.keys() | {"ops"}
+    assert all(vars(pb)[k] is v for k, v in before.items())
+    assert first["substeps"] == second["substeps"] == 8
+    assert first["error"] == second["error"] == pytest.approx(0.0316, abs=5e-4)
+    assert first["pairs"] > 0
+    # the coarser paths' limits: 1e-5 of the 1 % target, never tighter than the scene's
+    assert simulation.coarse_limits(pb).tol == pytest.approx(1e-7)
+    assert pb.limits.tol == 1e-10

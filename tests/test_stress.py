@@ -598,7 +598,7 @@ def test_cli_writes_the_api_result(tiny, tmp_path):
 
 def test_plot_functions_return_the_figure(sliding):
     from matplotlib.figure import Figure
-    from contactpipe.pipeline.plot_stress import (plot_stress, plot_stress_section,
+    from contactpipe.pipeline.figures.stress import (plot_stress, plot_stress_section,
                                                   plot_stress_surface)
     st = subsurface_stress(sliding, [0.0, 0.25 * A, 0.5 * A])
     fig = Figure()

@@ -18,7 +18,7 @@ from contactpipe.pipeline import cli
 from contactpipe.archive import open_archive
 from contactpipe.exceptions import ArchiveError, SceneError
 from contactpipe.scene import Scene
-from contactpipe.pipeline.config import load_sweep_file, read_sweep_file
+from contactpipe.pipeline.sweep.config import load_sweep_file, read_sweep_file
 from contactpipe.pipeline.sweep import (SweepLockedError, open_sweep,
                                register_parameter, sweep, with_window)
 from contactpipe.testing import TINY_SCENES
@@ -26,8 +26,8 @@ from contactpipe.testing import TINY_SCENES
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 # the module (``contactpipe.pipeline.sweep`` the attribute is the function)
-sweep_mod = importlib.import_module("contactpipe.pipeline.sweep")
-parameters_mod = importlib.import_module("contactpipe.pipeline.parameters")
+sweep_mod = importlib.import_module("contactpipe.pipeline.sweep.driver")
+parameters_mod = importlib.import_module("contactpipe.pipeline.sweep.parameters")
 
 # the 24 x 24 scenes of shared/examples, as contactpipe.testing carries them
 FRETTING = TINY_SCENES["fretting"]
@@ -499,7 +499,7 @@ def test_members_sent_back_are_simulated_in_the_worker_scratch_and_swept(tmp_pat
     runner = textwrap.dedent("""
         import os, signal, sys, types
         import distributed
-        from contactpipe.pipeline import execute
+        from contactpipe.pipeline.sweep import execute
         from contactpipe.scene import Scene
         worker = types.SimpleNamespace(local_directory=sys.argv[2])
         distributed.get_worker = lambda: worker
@@ -520,7 +520,7 @@ def test_members_sent_back_are_simulated_in_the_worker_scratch_and_swept(tmp_pat
     assert len(left) == 1 and left[0].name.startswith(f"contactpipe-member-{proc.pid}-")
     assert [p.name for p in left[0].iterdir()][0].startswith(".member.nc.")
     import distributed
-    from contactpipe.pipeline import execute
+    from contactpipe.pipeline.sweep import execute
     monkeypatch.setattr(distributed, "get_worker",
                         lambda: type("W", (), {"local_directory": str(local)})())
     assert execute.scratch_root() == local

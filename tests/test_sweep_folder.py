@@ -13,13 +13,13 @@ import pytest
 from contactpipe.archive import open_archive
 from contactpipe.exceptions import ArchiveError
 from contactpipe.pipeline import cli
-from contactpipe.pipeline.execute import land_member, run_member, workers_share_disk
-from contactpipe.pipeline.manifest import check_manifest, read_manifest
+from contactpipe.pipeline.sweep.execute import land_member, run_member, workers_share_disk
+from contactpipe.pipeline.sweep.manifest import check_manifest, read_manifest
 from contactpipe.pipeline.sweep import archive_state, open_sweep, sweep
 from contactpipe.scene import Scene
 from contactpipe.testing import TINY_SCENES
 
-sweep_mod = importlib.import_module("contactpipe.pipeline.sweep")
+sweep_mod = importlib.import_module("contactpipe.pipeline.sweep.driver")
 
 AXES = {"load.normal_force": [800.0, 1200.0]}
 

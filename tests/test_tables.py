@@ -14,10 +14,10 @@ import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from contactpipe import scene_parts
+from contactpipe.scene import parts as scene_parts
 from contactpipe.exceptions import SceneError
 from contactpipe._util.files import loads_toml
-from contactpipe.pipeline import config
+from contactpipe.pipeline.sweep import config
 from contactpipe.scene.model import FIELDS as SCENE_FIELDS
 from contactpipe.scene import Scene
 from contactpipe.scene.tables import Field, Reader, nesting_depth, show

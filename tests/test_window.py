@@ -69,7 +69,8 @@ def _sub_steps(pb, solve, count=4, margin=None):
         prev = Previous(st.q, st.u, st.p, None, st.motion)
         if f_last:
             prev = self_similar_start(prev, f / f_last, 1 / 3)
-        res = solve(op, pb.grid.gap, np.zeros((3, n, n)), f * W, np.zeros(2), pb.grid.cell, pb.grid.mu,
+        g = pb.grid
+        res = solve(op, g.gap, np.zeros((3, n, n)), f * W, np.zeros(2), g.cell, g.mu,
                     pb.plan, prev, lim)
         assert res.converged
         out.append(res)
@@ -103,7 +104,8 @@ def test_a_window_too_small_grows(problem, monkeypatch):
     op, n = pb.ops.first, pb.grid.shape[0]
     lim = Tolerances(1e-10, pb.limits.max_iter, pb.limits.max_passes)
     zero = np.zeros((3, n, n))
-    first = solve_instant(op, pb.grid.gap, zero, W / 16, np.zeros(2), pb.grid.cell, pb.grid.mu, pb.plan,
+    g = pb.grid
+    first = solve_instant(op, g.gap, zero, W / 16, np.zeros(2), g.cell, g.mu, pb.plan,
                           Previous(np.zeros((2, n, n)), zero, np.zeros((n, n))), lim)
     prev = Previous(first.q, first.u, first.p, None, None)
     grown = []
@@ -114,9 +116,9 @@ def test_a_window_too_small_grows(problem, monkeypatch):
         grown.append(cells is not None)
         return cells
     monkeypatch.setattr(window, "_outside", spy)
-    b = window.solve_in_window(op, pb.grid.gap, zero, W / 4, np.zeros(2), pb.grid.cell, pb.grid.mu,
+    b = window.solve_in_window(op, g.gap, zero, W / 4, np.zeros(2), g.cell, g.mu,
                                pb.plan, prev, lim)
-    a = solve_instant(op, pb.grid.gap, zero, W / 4, np.zeros(2), pb.grid.cell, pb.grid.mu, pb.plan, prev,
+    a = solve_instant(op, g.gap, zero, W / 4, np.zeros(2), g.cell, g.mu, pb.plan, prev,
                       lim)
     assert grown[0] and not grown[-1]
     assert np.abs(a.p - b.p).max() <= 1e-8 * a.p.max()

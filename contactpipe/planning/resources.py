@@ -205,7 +205,8 @@ AUTO_PRELOAD_GUESS = 32
 
 def _preload_substeps(setting) -> int:
     """Sub-step solves of a frictional preload: its n, and the coarser paths of its error
-    estimate (n/4 and n/2; 2, 4, ..., n/2 for "auto"; :func:`contactpipe.planning.accuracy.choose_preload`)."""
+    estimate (n/4 and n/2; 2, 4, ..., n/2 for "auto";
+    :func:`contactpipe.planning.accuracy.choose_preload`)."""
     if setting == "auto":
         return 2 * AUTO_PRELOAD_GUESS
     n = int(setting)
@@ -264,6 +265,20 @@ def _output_bytes(scene, tangential, instants, n, in_memory) -> int:
     return per_instant + check
 
 
+def _fft_pairs(scene, pl, n1, n2, instants) -> float:
+    """The FFT pairs of a run: per instant, by the plan's forms, times the instants (the
+    later ones by their share of a whole-grid step, the first by its preload's)."""
+    per_instant = PAIRS_PER_ROOT[pl.tangential] * (n1 * n2) ** 0.25 * \
+        (COUPLING_FACTOR[pl.tangential] if pl.coupling != "none" else 1.0)
+    # the frictional preload's sub-steps run where the pair couples (β = 0: the load at t0
+    # alone makes no shear, unless T is already there, which this estimate leaves out)
+    substeps = _preload_substeps(scene.solver.preload_substeps) \
+        if pl.tangential != "none" and pl.coupling != "none" else 1
+    if substeps > 1 and _windows_apply(scene, pl, n1, n2):
+        substeps *= WINDOWED_SUBSTEP
+    return per_instant * ((instants - 1) * _step_share(scene, n1, n2) + substeps)
+
+
 def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     """Memory and time a run of ``scene`` needs, computed from the grid, the plan and the
     instants alone (nothing is allocated).
@@ -271,7 +286,8 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     Parameters
     ----------
     scene : Scene
-        With its grid and steps resolved (after :func:`contactpipe.planning.accuracy.resolve_accuracy`).
+        With its grid and steps resolved (after
+        :func:`contactpipe.planning.accuracy.resolve_accuracy`).
     plan_ : Plan, optional
         The plan (:func:`plan` of the scene otherwise).
     in_memory : bool
@@ -331,23 +347,14 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
         "contact windows": _window_bytes(n1, n2, R, S),
         "base": BASE_BYTES,
     }
-    per_instant = PAIRS_PER_ROOT[pl.tangential] * n ** 0.25 * \
-        (COUPLING_FACTOR[pl.tangential] if pl.coupling != "none" else 1.0)
-    # the frictional preload's sub-steps run where the pair couples (β = 0: the load at t0
-    # alone makes no shear, unless T is already there, which this estimate leaves out)
-    substeps = _preload_substeps(scene.solver.preload_substeps) \
-        if tangential and pl.coupling != "none" else 1
-    if substeps > 1 and _windows_apply(scene, pl, n1, n2):
-        substeps *= WINDOWED_SUBSTEP
-    pairs = per_instant * ((instants - 1) * _step_share(scene, n1, n2) + substeps)
-    m = 4 * n
+    pairs, m = _fft_pairs(scene, pl, n1, n2, instants), 4 * n
     # the padded kernels of the set-up are freed before the operators are formed
     peak = parts["kernel spectra"] + parts["base"] + max(
         parts["kernel set-up"], sum(v for k, v in parts.items()
                                     if k not in ("kernel spectra", "kernel set-up", "base")))
     terms = _direct_terms(bodies, pl.memory, instants)
-    history = terms * (DIRECT_TERM_S + 3 * n * DIRECT_FLOAT_S)
-    fft = pairs * FFT_FLOOR_S * m * math.log2(max(m, 2))
+    history, fft = terms * (DIRECT_TERM_S + 3 * n * DIRECT_FLOAT_S), \
+        pairs * FFT_FLOOR_S * m * math.log2(max(m, 2))
     return Resources(memory_bytes=int(peak), parts=parts, fft_pairs=pairs,
                      seconds=fft + history, grid=(n1, n2), instants=instants,
                      estimated_seconds=TYPICAL_PAIRS * (fft + pairs * PAIR_COST_S) + history,

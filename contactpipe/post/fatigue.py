@@ -194,6 +194,50 @@ def _circumcentre(Q, sup):
     return w, centre, r2
 
 
+def _advance_sets(act, u, pc, b, tiny, limit, column):
+    """One step of each active set of :func:`min_ball`: towards its furthest point
+    (Frank-Wolfe) or away from its nearest supporting one, with the exact line search;
+    ``u`` (weights) and ``pc`` (products q_i . c) are updated in place. Returns the sets
+    still short of the tolerance (none when every set has reached it)."""
+    ua, pa = u[act], pc[act]
+    cc = (ua * pa).sum(1)
+    dist2 = b[act] - 2 * pa + cc[:, None]
+    gamma = (ua * dist2).sum(1)
+    r = np.arange(len(act))
+    j = np.argmax(dist2, axis=1)
+    dj = dist2[r, j]
+    pos = gamma > 0
+    dplus = np.where(pos, dj / np.where(pos, gamma, 1.0) - 1.0, np.inf)
+    done = (dplus <= limit) | (dj <= tiny[act])
+    if np.all(done):
+        return act[:0]
+    keep = ~done
+    act, ua, pa, dist2, gamma, j, dplus = (act[keep], ua[keep], pa[keep], dist2[keep],
+                                           gamma[keep], j[keep], dplus[keep])
+    r = np.arange(len(act))
+    masked = np.where(ua > 0, dist2, np.inf)
+    kk = np.argmin(masked, axis=1)
+    dminus = 1.0 - masked[r, kk] / np.where(gamma > 0, gamma, 1.0)
+    fwd = dplus >= dminus
+    # a single support point (gamma = 0): the line search gives lam = 1/2
+    lam_f = np.where(np.isinf(dplus), 0.5,
+                     dplus / (2 * (1 + np.where(np.isinf(dplus), 0.0, dplus))))
+    uk = ua[r, kk]
+    lam_a = np.minimum(dminus / (2 * (1 - np.minimum(dminus, 1 - 1e-16))),
+                       uk / np.maximum(1 - uk, 1e-300))
+    scale = np.where(fwd, 1 - lam_f, 1 + lam_a)
+    ua = ua * scale[:, None]
+    pa = pa * scale[:, None]
+    f, a = r[fwd], r[~fwd]
+    ua[f, j[fwd]] += lam_f[fwd]
+    pa[f] += lam_f[fwd][:, None] * column(act[f], j[fwd])
+    ua[a, kk[~fwd]] -= lam_a[~fwd]
+    pa[a] -= lam_a[~fwd][:, None] * column(act[a], kk[~fwd])
+    u[act] = np.clip(ua, 0.0, None)
+    pc[act] = pa
+    return act
+
+
 def min_ball(points, tolerance=1e-9, max_iter=100000):
     """Minimum enclosing balls of many small point sets (Frank-Wolfe with away steps).
 
@@ -260,42 +304,9 @@ def min_ball(points, tolerance=1e-9, max_iter=100000):
             act = act[~ok]
             if act.size == 0:
                 break
-        ua, pa = u[act], pc[act]
-        cc = (ua * pa).sum(1)
-        dist2 = b[act] - 2 * pa + cc[:, None]
-        gamma = (ua * dist2).sum(1)
-        r = np.arange(len(act))
-        j = np.argmax(dist2, axis=1)
-        dj = dist2[r, j]
-        pos = gamma > 0
-        dplus = np.where(pos, dj / np.where(pos, gamma, 1.0) - 1.0, np.inf)
-        done = (dplus <= limit) | (dj <= tiny[act])
-        if np.all(done):
+        act = _advance_sets(act, u, pc, b, tiny, limit, column)
+        if act.size == 0:
             break
-        keep = ~done
-        act, ua, pa, dist2, gamma, j, dplus = (act[keep], ua[keep], pa[keep], dist2[keep],
-                                               gamma[keep], j[keep], dplus[keep])
-        r = np.arange(len(act))
-        masked = np.where(ua > 0, dist2, np.inf)
-        kk = np.argmin(masked, axis=1)
-        dminus = 1.0 - masked[r, kk] / np.where(gamma > 0, gamma, 1.0)
-        fwd = dplus >= dminus
-        # a single support point (gamma = 0): the line search gives lam = 1/2
-        lam_f = np.where(np.isinf(dplus), 0.5,
-                         dplus / (2 * (1 + np.where(np.isinf(dplus), 0.0, dplus))))
-        uk = ua[r, kk]
-        lam_a = np.minimum(dminus / (2 * (1 - np.minimum(dminus, 1 - 1e-16))),
-                           uk / np.maximum(1 - uk, 1e-300))
-        scale = np.where(fwd, 1 - lam_f, 1 + lam_a)
-        ua = ua * scale[:, None]
-        pa = pa * scale[:, None]
-        f, a = r[fwd], r[~fwd]
-        ua[f, j[fwd]] += lam_f[fwd]
-        pa[f] += lam_f[fwd][:, None] * column(act[f], j[fwd])
-        ua[a, kk[~fwd]] -= lam_a[~fwd]
-        pa[a] -= lam_a[~fwd][:, None] * column(act[a], kk[~fwd])
-        u[act] = np.clip(ua, 0.0, None)
-        pc[act] = pa
     else:
         raise RuntimeError(f"minimum enclosing ball: {len(act)} point sets did not "
                            f"reach the relative tolerance {tolerance:g} in {max_iter} "

@@ -362,8 +362,9 @@ class Friction(Part):
     ----------
     mu : float or str
         Friction coefficient [1], >= 0; 0 (the default) is frictionless. Or the path of
-        a netCDF file with a variable ``mu`` over x1, x2 [m] (:mod:`contactpipe.scene.friction_map`),
-        stored as an absolute path (relative to the scene file in ``Scene.from_toml``).
+        a netCDF file with a variable ``mu`` over x1, x2 [m]
+        (:mod:`contactpipe.scene.friction_map`), stored as an absolute path (relative to
+        the scene file in ``Scene.from_toml``).
     """
 
     mu: float | str = 0.0

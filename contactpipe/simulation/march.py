@@ -520,23 +520,27 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
                     max_hours=scene.solver.max_hours)
     opts = (accuracy_note, on_step, progress, checkpoint_seconds, wall0)
     with signals_as_interrupt(only_default=True):
-        if path is None:
-            return _march(Problem(scene, pl, fft, threads, tuning), None, None, *opts)
+        return _run(Problem(scene, pl, fft, threads, tuning), path, resume, opts)
+
+
+def _run(pb, path, resume, opts):
+    """March ``pb`` in memory (``path`` None), into a new archive, or resumably."""
+    if path is None:
+        return _march(pb, None, None, *opts)
+    try:
+        make_folder(path.parent)
+    except OSError as e:
+        raise OutputPathError(f"archive {path}: cannot create its folder "
+                              f"({e.strerror or one_line(e)})") from None
+    if not resume:
+        return open_archive(_march(pb, path, None, *opts))
+    lock = resume_lock(path)
+    with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
+        ckpt = Checkpoint(path, pb.scene.digest())
+        ckpt.clean()                    # what a run killed while checkpointing left
         try:
-            make_folder(path.parent)
-        except OSError as e:
-            raise OutputPathError(f"archive {path}: cannot create its folder "
-                                  f"({e.strerror or one_line(e)})") from None
-        if not resume:
-            pb = Problem(scene, pl, fft, threads, tuning)
-            return open_archive(_march(pb, path, None, *opts))
-        lock = resume_lock(path)
-        with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
-            ckpt = Checkpoint(path, scene.digest())
-            ckpt.clean()                # what a run killed while checkpointing left
-            try:
-                result = _march(Problem(scene, pl, fft, threads, tuning), path, ckpt, *opts)
-            finally:
-                lock.unlink(missing_ok=True)
-        return open_archive(result)
+            result = _march(pb, path, ckpt, *opts)
+        finally:
+            lock.unlink(missing_ok=True)
+    return open_archive(result)
 

@@ -23,7 +23,7 @@ The wisdom lives in one small text file (FFTW's own format, double precision onl
 It is a cache and nothing more: a missing, unreadable or foreign file is ignored (FFTW
 refuses wisdom it cannot parse), and a file that cannot be written is not written. Writes
 go to a temporary file renamed over the old one, so that processes that plan at the same
-time never leave a half-written file (:func:`contactpipe.files.atomic_path`).
+time never leave a half-written file (:func:`contactpipe._util.files.atomic_path`).
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ from pathlib import Path
 
 import pyfftw
 
-from ..files import atomic_path
+from .._util.files import atomic_path
 
 __all__ = ["ENV", "load", "path", "save"]
 

@@ -67,12 +67,12 @@ import time
 
 import numpy as np
 
-from ..exceptions import SceneError
-from .._util.files import check_output_path, write_text
-from ..scene import Scene
-from ..simulation import simulate
-from ..solver.convolution import Convolver
-from ..solver.options import tuning_from
+from ...exceptions import SceneError
+from ..._util.files import check_output_path, write_text
+from ...scene import Scene
+from ...simulation import simulate
+from ...solver.convolution import Convolver
+from ...solver.options import tuning_from
 
 __all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
            "table_rows", "write_table", "default_table_path"]

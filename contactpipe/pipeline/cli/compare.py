@@ -4,7 +4,7 @@ Checks an archive against the closed form of its scene, or against a reference a
 prints the largest value of each error and when it occurs, and writes the error table
 (netCDF or CSV) and the profiles figure when asked. The table comes from
 :func:`contactpipe.pipeline.compare.compare`, the figure from
-:func:`contactpipe.pipeline.plot.plot_profiles` (the closed form dashed or the reference
+:func:`contactpipe.pipeline.figures.plot.plot_profiles` (the closed form dashed or the reference
 dotted, on top of the numerical curves); every output path is checked before any work.
 """
 from __future__ import annotations
@@ -12,9 +12,9 @@ from __future__ import annotations
 import argparse
 import pathlib
 
-from .._util.files import check_output_dir, check_output_path
-from . import compare as compare_stage
-from .plot import plot_profiles, save_figure
+from ..._util.files import check_output_dir, check_output_path
+from ..compare import tables as compare_stage
+from ..figures.plot import plot_profiles, save_figure
 
 __all__ = ["add_arguments", "main"]
 

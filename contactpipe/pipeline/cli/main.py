@@ -36,25 +36,26 @@ import signal
 import sys
 import warnings
 
-from .._version import __version__
-from ..exceptions import (ArchiveError, ContactpipeError, OutputPathError, ResumeNotice,
+from ..._version import __version__
+from ...exceptions import (ArchiveError, ContactpipeError, OutputPathError, ResumeNotice,
                           SceneError, one_line)
-from .._util.files import LockedError, check_output_path, make_folder
-from .._util.interrupts import deferred, pending, raise_if_signalled, signals_as_interrupt
+from ..._util.files import LockedError, check_output_path, make_folder
+from ..._util.interrupts import deferred, pending, raise_if_signalled, signals_as_interrupt
 
 __all__ = ["main", "build_parser"]
 
 STAGES = {
     # name: (module, one-line help)
-    "sweep": ("contactpipe.pipeline.sweep", "run a parameter sweep on dask (resumable)"),
-    "compare": ("contactpipe.pipeline.compare_cli",
+    "sweep": ("contactpipe.pipeline.sweep.driver", "run a parameter sweep on dask (resumable)"),
+    "compare": ("contactpipe.pipeline.cli.compare",
                 "compare archives with closed forms or each other"),
-    "plot": ("contactpipe.pipeline.plot", "figures of an archive, a stress file or a sweep folder"),
-    "pipeline": ("contactpipe.pipeline.run",
+    "plot": ("contactpipe.pipeline.figures.plot",
+             "figures of an archive, a stress file or a sweep folder"),
+    "pipeline": ("contactpipe.pipeline.cli.run",
                  "sweep -> compare -> plot (-> stress), idempotent, cron-safe"),
-    "bench": ("contactpipe.pipeline.bench",
+    "bench": ("contactpipe.pipeline.cli.bench",
               "print solver speed figures (FFT pairs, iterations, time)"),
-    "stress": ("contactpipe.pipeline.stress_cmd",
+    "stress": ("contactpipe.pipeline.cli.stress",
                "subsurface stress field of an archive (DC-FFT per depth)"),
 }
 
@@ -80,7 +81,7 @@ def _add_run(sub):
 
 
 def _run(args) -> int:
-    from ..scene import Scene            # light: numpy, tomllib and the scene modules
+    from ...scene import Scene            # light: numpy, tomllib and the scene modules
     scene = Scene.from_toml(args.scene)
     inputs = [args.scene, *scene.input_files()]
     output = check_output_path(args.output, "archive (-o)", inputs=inputs)
@@ -89,7 +90,7 @@ def _run(args) -> int:
         figure = check_output_path(args.figure, "figure (--figure)", inputs=inputs,
                                    others=[("archive (-o)", output)])
     tangential = None if args.tangential in (None, "auto") else args.tangential
-    from ..simulation import simulate    # heavy (xarray, dask, FFT): after the checks
+    from ...simulation import simulate    # heavy (xarray, dask, FFT): after the checks
     try:
         ds = simulate(scene, output, progress=not args.no_progress, tangential=tangential,
                       fft=args.fft, threads=args.threads, resume=args.resume)
@@ -102,7 +103,8 @@ def _run(args) -> int:
           f"{float(ds.attrs['wall_time_s']):.2f} s)")
     if figure is not None:
         raise_if_signalled()             # a signal came after the archive: no figure
-        from .plot import plot_profiles, save_figure  # matplotlib: only when a figure is asked
+        # matplotlib: only when a figure is asked
+        from ..figures.plot import plot_profiles, save_figure
         make_folder(figure.parent)
         save_figure(plot_profiles(ds), figure)
         print(f"wrote {figure}")

@@ -4,9 +4,9 @@
 [--shared-disk | --no-shared-disk] [--no-progress]``
 runs the sweep of the file (on dask, resumable: :mod:`contactpipe.pipeline.sweep`), compares every
 member with its closed form or a reference archive (:mod:`contactpipe.pipeline.compare`), draws the
-standard figures of every member and an overlay of the sweep (:mod:`contactpipe.pipeline.plot`),
-computes the subsurface stress of every member when the file asks for it
-(:mod:`contactpipe.pipeline.stress_cmd`), and writes a summary.
+standard figures of every member and an overlay of the sweep
+(:mod:`contactpipe.pipeline.figures.plot`), computes the subsurface stress of every member
+when the file asks for it (:mod:`contactpipe.pipeline.cli.stress`), and writes a summary.
 
 Pipeline file::
 
@@ -35,7 +35,7 @@ Pipeline file::
 
 A scheduler address is trusted code: dask's protocol unpickles what the scheduler sends,
 so never point a pipeline at a scheduler you do not control (the sweep's workers need
-not share this machine's disk: :mod:`contactpipe.pipeline.execute`).
+not share this machine's disk: :mod:`contactpipe.pipeline.sweep.execute`).
 
 ``out`` may also be given inside ``[sweep]``; it must be a folder (existing or to be
 created): a file, a device or the pipeline file itself is refused before any work. Members
@@ -51,13 +51,13 @@ Outputs, in ``out``
 ``figures/<digest>-<kind>.png``
     Per member figures (``profiles``, ``hysteresis``, ``radii``).
 ``figures/sweep-<variable>.png``
-    The members overlaid (:func:`contactpipe.pipeline.plot.plot_sweep`).
+    The members overlaid (:func:`contactpipe.pipeline.figures.plot.plot_sweep`).
 ``stress/<digest>.nc``, ``figures/<digest>-stress.png``
     With ``[stress]``: the member's stress field over (time, x3, x1, x2) and, with a
     criterion, the criterion's fields over (x3, x1, x2), in one file
-    (:func:`contactpipe.pipeline.stress_cmd.write_stress_product`; streamed block by
+    (:func:`contactpipe.pipeline.cli.stress.write_stress_product`; streamed block by
     block, bounded memory), and its figure (the ``stress`` kind of
-    :mod:`contactpipe.pipeline.plot`: the criterion, else von Mises, on the x1-x3 plane
+    :mod:`contactpipe.pipeline.figures.plot`: the criterion, else von Mises, on the x1-x3 plane
     through the centre and on the surface).
 ``summary.json``
     What this run did: members (values, digest, status, error), products (path, written
@@ -73,8 +73,8 @@ when older than its archive or made with other ``[stress]`` settings (the digest
 settings is stored in the product and compared: a change of depths, body, instants,
 criterion, constants, cycle or precision recomputes it), its figure when older than it. Every
 product is written to a temporary name and renamed, so an interrupted run leaves no half file.
-Figures are drawn by :mod:`contactpipe.pipeline.plot` and written by its
-:func:`~contactpipe.pipeline.plot.save_figure`.
+Figures are drawn by :mod:`contactpipe.pipeline.figures.plot` and written by its
+:func:`~contactpipe.pipeline.figures.plot.save_figure`.
 
 Cron-safe
 ---------
@@ -102,15 +102,17 @@ import time as _time
 
 from tqdm.auto import tqdm
 
-from ..exceptions import ArchiveError, ContactpipeError
-from ..exceptions import one_line as _one_line
-from .._util.files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
+from ...exceptions import ArchiveError, ContactpipeError
+from ...exceptions import one_line as _one_line
+from ..._util.files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
                      make_folder, utc_now as _now, write_json as _write_json)
-from . import compare as compare_stage, plot as plot_stage, stress_cmd as stress_stage
-from .combine import open_sweep
-from .config import CLOSED_FORM, FIGURES, MEMBER_FIGURES, PipelineSpec, read_pipeline_file
-from .reference import closed_form_for
-from .sweep import SweepLockedError, sweep
+from ..compare import tables as compare_stage
+from ..figures import plot as plot_stage
+from . import stress as stress_stage
+from ..sweep.combine import open_sweep
+from ..sweep.config import CLOSED_FORM, FIGURES, MEMBER_FIGURES, PipelineSpec, read_pipeline_file
+from ..compare.reference import closed_form_for
+from ..sweep import SweepLockedError, sweep
 
 __all__ = ["run_pipeline", "read_pipeline_file", "PipelineSpec", "PipelineResult",
            "PipelineLockedError", "MEMBER_FIGURES", "FIGURES", "LOCK", "SUMMARY",
@@ -253,7 +255,7 @@ def _member_figures(ds, archive: pathlib.Path, figdir: pathlib.Path, digest: str
     """Draw the member figures ``kinds`` that apply and are not current.
 
     Returns (written, up_to_date, not_applicable) lists; ``plot.plot_<kind>(ds)`` draws
-    the figure, :func:`~contactpipe.pipeline.plot.save_figure` writes
+    the figure, :func:`~contactpipe.pipeline.figures.plot.save_figure` writes
     ``figures/<digest>-<kind>.png``.
     """
     written, current, skipped = [], [], []

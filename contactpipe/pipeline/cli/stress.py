@@ -16,7 +16,7 @@ other output, an unreadable, foreign or damaged archive, an unknown body, a dept
 line on stderr; 1 when the computation or the write fails (a read-only or full disk
 included). No stress file holding NaN or inf is ever written.
 
-The pipeline's ``[stress]`` product (:mod:`contactpipe.pipeline.run`) is written here too:
+The pipeline's ``[stress]`` product (:mod:`contactpipe.pipeline.cli.run`) is written here too:
 :func:`write_stress_product` puts the stress and, when the pipeline file asks for a
 fatigue criterion, the criterion's fields in one file, with the settings that made it
 (their digest decides whether a later run recomputes it).
@@ -34,14 +34,14 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
-from ..archive import open_archive
-from ..archive.schema import scene_table
-from ..exceptions import ArchiveError, ContactpipeError, one_line
-from ..post.fatigue import fatigue
-from .._util.files import atomic_path, check_output_path, make_folder
-from ..post.stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
-from .config import StressSpec
-from .plot import plot_stress, save_figure
+from ...archive import open_archive
+from ...archive.schema import scene_table
+from ...exceptions import ArchiveError, ContactpipeError, one_line
+from ...post.fatigue import fatigue
+from ..._util.files import atomic_path, check_output_path, make_folder
+from ...post.stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
+from ..sweep.config import StressSpec
+from ..figures.plot import plot_stress, save_figure
 
 __all__ = ["add_arguments", "main", "parse_depths", "parse_time", "write_stress_product",
            "product_record", "stored_digest", "SETTINGS_ATTR", "DIGEST_ATTR"]

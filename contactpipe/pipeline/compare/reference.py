@@ -3,7 +3,7 @@
 :func:`closed_form_for` says which closed form applies to a scene (or an archive's
 scene), :func:`diagnose` also says why each other candidate does not, and
 :func:`closed_form_solution` builds the :class:`ClosedForm` that the comparison
-(:mod:`contactpipe.pipeline.compare`) and the figures (:mod:`contactpipe.pipeline.plot`)
+(:mod:`contactpipe.pipeline.compare`) and the figures (:mod:`contactpipe.pipeline.figures.plot`)
 draw on. All formulae come from :mod:`contactpipe.analytic`.
 
 ``hertz``
@@ -55,12 +55,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import analytic
-from ..exceptions import ArchiveError, SceneError
-from ..post.fretting import loop_cycles
-from ..materials import composite_modulus
-from ..planning import pair_couples
-from .inputs import scene_of
+from ... import analytic
+from ...exceptions import ArchiveError, SceneError
+from ...post.fretting import loop_cycles
+from ...materials import composite_modulus
+from ...planning import pair_couples
+from ..inputs import scene_of
 
 __all__ = ["ClosedForm", "closed_form_for", "closed_form_solution", "diagnose",
            "no_closed_form_message", "cell_average_field", "iwan_dissipation",

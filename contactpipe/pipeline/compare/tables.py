@@ -1,13 +1,13 @@
 """Compare an archive with the closed form its scene admits, or with another archive.
 
 ``compare(archive)`` checks a simulation against the closed-form solution of its scene
-(:func:`contactpipe.pipeline.reference.closed_form_for` says which one applies, the
-module :mod:`contactpipe.pipeline.reference` lists the closed forms and their
+(:func:`contactpipe.pipeline.compare.reference.closed_form_for` says which one applies, the
+module :mod:`contactpipe.pipeline.compare.reference` lists the closed forms and their
 conditions); ``compare(archive, reference)`` interpolates a reference archive onto the
 archive's instants and cells and compares every variable the two share. Either way the
 result is an error table, an :class:`xarray.Dataset` over ``time`` (written as netCDF or
 CSV by :func:`write_table`). The command line (``contactpipe compare``) is
-:mod:`contactpipe.pipeline.compare_cli`.
+:mod:`contactpipe.pipeline.cli.compare`.
 
 Error variables (over ``time`` unless said otherwise): ``err_p_max``, ``err_p_rms``,
 ``err_contact_radius``, ``err_omega3`` for every closed form (Lee-Radok under a growing
@@ -38,17 +38,17 @@ from __future__ import annotations
 
 import math
 import os
-import pathlib
 
 import dask
 import numpy as np
 import xarray as xr
 
-from ..archive import open_archive
-from ..exceptions import ArchiveError
-from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
-from .inputs import grid_of, radius_of_area, scene_of
+from ...archive import open_archive
+from ...exceptions import ArchiveError
+from ..inputs import grid_of, radius_of_area, scene_of
 from .reference import LOADING_FORMS, closed_form_solution
+
+from .output import TABLE_SUFFIXES, check_table_path, write_table, format_table
 
 __all__ = ["compare", "load_dataset", "write_table", "format_table", "check_table_path",
            "physical_scales", "TABLE_SUFFIXES"]
@@ -57,8 +57,6 @@ FIELD = ("time", "x1", "x2")
 #: Solver diagnostics: not compared between archives.
 DIAGNOSTICS = ("iterations", "fft_pairs", "coupling_passes")
 TRACTIONS = ("p", "q1", "q2")
-#: The formats of an error table, by suffix.
-TABLE_SUFFIXES = (".nc", ".csv")
 
 
 # --------------------------------------------------------------------------- inputs
@@ -399,6 +397,24 @@ def _scale(ds, ref, name, floors) -> float:
     return s if s > 0 and np.isfinite(s) else 1.0
 
 
+def _radius_errors(ds, ref_series, floors, cell_side) -> dict:
+    """The contact radius's relative error and the stick radius's error in cells, per
+    instant, from the areas of ``ds`` and the reference's areas at its instants."""
+    a_floor = NOISE * math.sqrt(floors["m2"] / math.pi)
+    cols = {}
+    for area, name, rel in (("contact_area", "err_contact_radius", True),
+                            ("stick_area", "err_stick_radius_cells", False)):
+        if area in ref_series:
+            mine = np.asarray(ds[area].values, float)
+            out = np.full(mine.size, np.nan)
+            for k in range(mine.size):
+                if np.isfinite(ref_series[area][k]):
+                    a, b = radius_of_area(mine[k]), radius_of_area(ref_series[area][k])
+                    out[k] = _rel(a, b, a_floor) if rel else abs(a - b) / cell_side
+            cols[name] = out
+    return cols
+
+
 def _compare_archives(ds, ref, label, ref_label):
     shared = [v for v in ds.data_vars if v in ref.data_vars and v not in DIAGNOSTICS]
     fields = [v for v in shared if ds[v].dims == FIELD and ref[v].dims == FIELD]
@@ -464,17 +480,7 @@ def _compare_archives(ds, ref, label, ref_label):
                                   (1 - w[2]) * vals[w[0]] + w[2] * vals[w[1]] for w in where])
         mine = np.asarray(ds[v].values, float)
         cols[f"err_{v}"] = np.abs(mine - ref_series[v]) / scales[v]
-    a_floor = NOISE * math.sqrt(floors["m2"] / math.pi)
-    for area, name, rel in (("contact_area", "err_contact_radius", True),
-                            ("stick_area", "err_stick_radius_cells", False)):
-        if area in ref_series:
-            mine = np.asarray(ds[area].values, float)
-            out = np.full(nt, np.nan)
-            for k in range(nt):
-                if np.isfinite(ref_series[area][k]):
-                    a, b = radius_of_area(mine[k]), radius_of_area(ref_series[area][k])
-                    out[k] = _rel(a, b, a_floor) if rel else abs(a - b) / math.sqrt(d1 * d2)
-            cols[name] = out
+    cols.update(_radius_errors(ds, ref_series, floors, math.sqrt(d1 * d2)))
     scalars = {}
     if "dissipation" in ref_series:
         last = [k for k in range(nt) if where[k] is not None][-1]
@@ -582,79 +588,6 @@ def _summary(table) -> str:
             f"{table.attrs['steps']} steps: max " + ", ".join(parts))
 
 
-# --------------------------------------------------------------------------- output
-
-def check_table_path(out, inputs=()) -> pathlib.Path:
-    """Refuse, before any work, a path an error table cannot be written to.
-
-    Raises
-    ------
-    ArchiveError
-        The suffix is neither ``.nc`` nor ``.csv``.
-    OutputPathError
-        Empty, a directory, a device or other special file, one of ``inputs``, or a
-        folder that is a file (:func:`contactpipe._util.files.check_output_path`).
-    """
-    out = check_output_path(out, "error table", inputs=inputs)
-    if out.suffix.lower() not in TABLE_SUFFIXES:
-        raise ArchiveError(f"{out}: the error table is written as netCDF (.nc) or CSV "
-                           f"(.csv), got suffix {out.suffix!r}")
-    check_output_dir(out.parent, "folder of the error table")
-    return out
-
-
-def write_table(table: xr.Dataset, out) -> pathlib.Path:
-    """Write an error table atomically: netCDF for ``.nc``, CSV for ``.csv``.
-
-    The CSV has ``#`` comment lines first (attributes and scalar errors), then one row
-    per instant (read it with ``pandas.read_csv(path, comment="#")``). The path is
-    checked first (:func:`check_table_path`); its folder is created.
-    """
-    out = check_table_path(out)
-    make_folder(out.parent)
-    with atomic_path(out) as tmp:
-        if out.suffix.lower() == ".nc":
-            table.to_netcdf(tmp, engine="netcdf4")
-        else:
-            _write_csv(table, tmp)
-    return out
-
-
-def _write_csv(table: xr.Dataset, path) -> None:
-    lines = [f"# {k}: {_attr_text(v)}" for k, v in table.attrs.items()]
-    lines += [f"# {k} = {float(table[k]):.17g}" for k in table.data_vars
-              if table[k].ndim == 0]
-    series = [k for k in table.data_vars if table[k].dims == ("time",)]
-    frame = table[series].to_dataframe()
-    with open(path, "w", encoding="utf-8", newline="") as f:
-        f.write("\n".join(lines) + "\n")
-        frame.to_csv(f, float_format="%.10g")
-
-
-def _attr_text(v):
-    if isinstance(v, np.ndarray):
-        return " ".join(str(x) for x in v.tolist())
-    return " ".join(str(v).split())
-
-
-def format_table(table: xr.Dataset) -> str:
-    """A short text table: the largest value of each error and when it occurs."""
-    rows = []
-    width = max(len(k) for k in table.data_vars)
-    for k, v in table.data_vars.items():
-        vals = np.asarray(v.values, float)
-        if v.ndim == 0:
-            rows.append(f"  {k:<{width}}  {float(vals):10.3g}  (final)")
-            continue
-        if not np.any(np.isfinite(vals)):
-            rows.append(f"  {k:<{width}}  {'n/a':>10}")
-            continue
-        i = int(np.nanargmax(vals))
-        rows.append(f"  {k:<{width}}  {vals[i]:10.3g}  (max, at t = "
-                    f"{float(table['time'][i]):.4g} s)")
-    return "\n".join([table.attrs.get("summary", "")] + rows)
-
-
 # --------------------------------------------------------------------------- public
 
 def _paths(*objs) -> list:
@@ -670,7 +603,7 @@ def compare(archive, reference=None, *, out=None) -> xr.Dataset:
     archive : path or xarray.Dataset
         The archive to check.
     reference : path or xarray.Dataset, optional
-        None: the closed form :func:`~contactpipe.pipeline.reference.closed_form_for`
+        None: the closed form :func:`~contactpipe.pipeline.compare.reference.closed_form_for`
         chooses. An archive: it is interpolated onto ``archive``'s instants (on
         ``t_norm`` = (t - t0)/window when the two windows differ) and cells (linearly;
         status by nearest cell), and every variable the two share is compared (solver
@@ -699,7 +632,7 @@ def compare(archive, reference=None, *, out=None) -> xr.Dataset:
 
     See Also
     --------
-    contactpipe.pipeline.plot.plot_profiles : the profiles against the closed form or
+    contactpipe.pipeline.figures.plot.plot_profiles : the profiles against the closed form or
         the reference (``reference=``).
     """
     if out is not None:

@@ -2,8 +2,8 @@
 
 :func:`new_figure`: an 8 x 5 in :class:`matplotlib.figure.Figure` at 100 dpi with a tight
 layout, never attached to pyplot (no global state, no window). Shared by
-:mod:`contactpipe.pipeline.plot` (which re-exports it) and the figure modules below it
-(:mod:`contactpipe.pipeline.plot_fretting`).
+:mod:`contactpipe.pipeline.figures.plot` (which re-exports it) and the figure modules below it
+(:mod:`contactpipe.pipeline.figures.fretting`).
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The fretting map of a sweep (the ``fretting-map`` kind of ``contactpipe plot``).
 
-:func:`plot_fretting_map` draws each member's regime (:mod:`contactpipe.pipeline.regimes`:
+:func:`plot_fretting_map` draws each member's regime (:mod:`contactpipe.pipeline.figures.regimes`:
 partial slip, mixed, gross slip by Fouvry's energy ratio; one marker per regime) over the
 displacement amplitude delta* [um] and the friction coefficient mu or the normal force W,
 with the closed-form boundary delta_gs(mu, W) = 3 mu W C / (16 a) of Mindlin's sphere
@@ -18,9 +18,9 @@ import os
 import numpy as np
 import xarray as xr
 
-from .. import analytic
-from ..exceptions import ArchiveError
-from .figures import axes_of
+from ... import analytic
+from ...exceptions import ArchiveError
+from .canvas import axes_of
 from .regimes import fretting_map
 
 __all__ = ["plot_fretting_map", "plot_energy_ratio", "MARKERS", "map_axis"]
@@ -38,7 +38,8 @@ def _table(obj):
     if isinstance(obj, xr.Dataset):
         if "regime" not in obj:
             raise ArchiveError("the dataset is not a regime table (no 'regime'); give a "
-                               "sweep folder or contactpipe.pipeline.regimes.fretting_map()")
+                               "sweep folder or "
+                               "contactpipe.pipeline.figures.regimes.fretting_map()")
         return obj
     if isinstance(obj, (str, os.PathLike)):
         return fretting_map(obj)
@@ -97,7 +98,7 @@ def plot_fretting_map(sweep, against=None, *, ax=None):
     Parameters
     ----------
     sweep : path or xarray.Dataset
-        A sweep folder (classified by :func:`contactpipe.pipeline.regimes.fretting_map`)
+        A sweep folder (classified by :func:`contactpipe.pipeline.figures.regimes.fretting_map`)
         or its regime table.
     against : {"mu", "W"}, optional
         The ordinate; default the load that varies over the members (:func:`map_axis`).

@@ -5,9 +5,8 @@
 file (written by ``contactpipe stress`` or the pipeline's ``[stress]`` product);
 ``contactpipe plot SWEEP_DIR/ -o FIG.png [--kind sweep] [--variable NAME]`` for a sweep
 folder, ``contactpipe plot SWEEP_DIR/ -o FIG.png --kind fretting-map [--against mu|W]`` for
-the fretting map of a displacement-controlled fretting sweep. Each kind of input takes its
-own kinds (:data:`INPUTS`); a kind that does not apply to the input is one line on stderr and exit
-status 2, nothing written.
+the fretting map of a displacement-controlled fretting sweep. Each kind of input takes its own kinds (:data:`INPUTS`); a kind that does not
+apply to the input is one line on stderr and exit status 2, nothing written.
 
 - :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
   instants, the closed form (black dashes) or a reference archive (black dots) drawn
@@ -20,10 +19,10 @@ status 2, nothing written.
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
 - :func:`plot_fretting_map`: the regime of each member of a fretting sweep over the
   displacement amplitude and mu or W, with the closed-form boundary
-  (:mod:`contactpipe.pipeline.plot_fretting`); :func:`plot_energy_ratio` its energy ratios.
+  (:mod:`contactpipe.pipeline.figures.fretting`); :func:`plot_energy_ratio` its energy ratios.
 - :func:`plot_stress`: a stress field or fatigue criterion (von Mises, or the criterion's
   main field when the file holds one) on the x1-x3 plane through the centre and on the
-  surface (:mod:`contactpipe.pipeline.plot_stress` draws the panels).
+  surface (:mod:`contactpipe.pipeline.figures.stress` draws the panels).
 - :func:`standard_figures`: every figure that applies to an archive, written to a folder.
 
 Every plotting function draws into the axes it is given (``ax=``, or ``fig=`` for the
@@ -42,30 +41,27 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import itertools
-import math
-import os
 import pathlib
 import sys
 import warnings
 
 import numpy as np
-import xarray as xr
 
-from .. import analytic
-from ..exceptions import ArchiveError, ContactpipeError, SceneError, one_line
-from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
-from .._util.interrupts import raise_if_signalled
-from ..materials import composite_modulus
-from ..nomenclature import VARIABLES
-from ..post.stress import is_stress_file, open_stress
-from .combine import MANIFEST, open_sweep
-from .compare import load_dataset
-from .figures import DPI, FIGSIZE, axes_of, new_figure
-from .plot_fretting import plot_energy_ratio, plot_fretting_map
-from .inputs import centre_rows, grid_of, radius_of_area, scene_of
-from .plot_stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
-from .reference import ClosedForm, closed_form_for, closed_form_solution
+from ...exceptions import ArchiveError, ContactpipeError, SceneError, one_line
+from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from ..._util.interrupts import raise_if_signalled
+from ..sweep.combine import MANIFEST
+from .canvas import DPI, FIGSIZE, new_figure
+from .fretting import plot_energy_ratio, plot_fretting_map
+from ..inputs import centre_rows, grid_of, scene_of
+from .stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
+
+from .common import (INPUTS, KINDS, input_kind, open_input, _opened, _dataset,
+                     has_tangential_load, figure_applies, _time_label,
+                     _scales, _profile, _index, _default_instants,
+                     _solution, _scene_title, CLOSED_STYLE)
+from .series import plot_hysteresis, plot_radii
+from .sweeps import plot_sweep
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
            "plot_stress", "plot_stress_section", "plot_stress_surface", "plot_fretting_map",
@@ -75,15 +71,8 @@ __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_
            "INPUTS"]
 
 #: The figures of an archive (``all``: every one that applies, into a folder).
-KINDS = ("profiles", "maps", "hysteresis", "radii")
 #: Each kind of input: what it is called, and the figure kinds that apply (default first).
-INPUTS = {
-    "archive": ("an archive", KINDS + ("all",)),
-    "stress": ("a stress file", ("stress",)),
-    "sweep": ("a sweep folder", ("sweep", "fretting-map")),
-}
 #: The closed form: black dashes on top of the numerical curves (never hidden under them).
-CLOSED_STYLE = {"color": "k", "ls": "--", "lw": 1.1, "zorder": 4}
 #: A reference archive: black dots on top.
 REFERENCE_STYLE = {"color": "k", "ls": ":", "lw": 1.4, "zorder": 4}
 STATUS_COLOURS = ("#e6e6e6", "#2c7bb6", "#d7191c")     # separated, stick, slip
@@ -126,195 +115,6 @@ def save_figure(fig, path) -> pathlib.Path:
             fig.savefig(tmp, format="png", dpi=DPI)
             raise_if_signalled()     # a signal that waited (a deferred one): not published
     return path
-
-
-# --------------------------------------------------------------------------- inputs
-
-def input_kind(path) -> str:
-    """What a figure input is: ``"sweep"`` (a folder), ``"stress"`` (a netCDF file holding
-    a stress field, :func:`contactpipe.post.stress.is_stress_file`) or ``"archive"`` (anything
-    else; opening it says when it is not one)."""
-    path = pathlib.Path(path)
-    if path.is_dir():
-        return "sweep"
-    return "stress" if is_stress_file(path) else "archive"
-
-
-@contextlib.contextmanager
-def open_input(path, expect: str | None = None):
-    """Open a figure input: yields (kind, Dataset) and closes it after.
-
-    An archive is opened verified (:func:`contactpipe.open_archive`), a stress file
-    verified too (:func:`contactpipe.post.stress.open_stress`: NaN, inf and checksum errors
-    refused), a sweep folder by :func:`open_sweep`; all lazily.
-
-    Raises
-    ------
-    ArchiveError
-        The input cannot be opened, or it is not of the kind ``expect`` (a key of
-        :data:`INPUTS`).
-    """
-    kind = input_kind(path)
-    if expect is not None and kind != expect:
-        raise ArchiveError(f"{path} is {INPUTS[kind][0]}, not {INPUTS[expect][0]}")
-    opener = {"archive": lambda p: load_dataset(p)[0],
-              "stress": lambda p: open_stress(p, verify=True), "sweep": open_sweep}[kind]
-    ds = opener(path)
-    try:
-        yield kind, ds
-    finally:
-        ds.close()
-
-
-@contextlib.contextmanager
-def _opened(obj, expect: str):
-    """The Dataset of ``obj``: a Dataset as it is, or a path opened by :func:`open_input`
-    as ``expect`` (and closed after)."""
-    if isinstance(obj, xr.Dataset):
-        yield obj
-        return
-    if not isinstance(obj, (str, os.PathLike)):
-        raise ArchiveError(f"expected a path or an xarray.Dataset, got {type(obj).__name__}")
-    with open_input(obj, expect) as (_, ds):
-        yield ds
-
-
-def _dataset(obj):
-    """The archive ``obj`` (a Dataset or a path), closed after if opened here."""
-    return _opened(obj, "archive")
-
-
-# --------------------------------------------------------------------------- helpers
-
-
-def _frictional(ds) -> bool:
-    return all(v in ds for v in ("q1", "T1", "omega1"))
-
-
-def has_tangential_load(ds) -> bool:
-    """True for a frictional archive (q1, T1, omega1) whose T1 is not all zero: the
-    archives whose fretting loop :func:`plot_hysteresis` draws."""
-    return _frictional(ds) and bool(np.any(np.abs(np.asarray(ds["T1"].values)) > 0))
-
-
-def figure_applies(kind: str, ds) -> bool:
-    """Whether the figure ``kind`` (one of :data:`KINDS`) applies to an archive: the
-    fretting loop needs a tangential load, the others always apply."""
-    return has_tangential_load(ds) if kind == "hysteresis" else True
-
-
-def _window(ds):
-    """(t0, tau) [s]: the start and length of the load window."""
-    t = np.asarray(ds["time"].values, float)
-    try:
-        scene = scene_of(ds)
-        tk = scene.load.knots()[0]
-        t0, tau = float(tk[0]), float(tk[-1] - tk[0])
-    except ArchiveError:
-        t0, tau = float(t[0]), float(t[-1] - t[0])
-    return t0, tau
-
-
-def _time_label(ds, k):
-    t0, tau = _window(ds)
-    t = float(ds["time"].values[k])
-    if tau > 0:
-        return f"t/τ = {(t - t0) / tau:.3g}"
-    return f"t = {t:.3g} s"
-
-
-def _scales(ds):
-    """(pH [Pa], aH [m], names): Hertz peak pressure and radius with instantaneous moduli.
-
-    Sphere: Hertz; ellipsoid: p0 and the semi-axis along x1; flat punch: the mean
-    pressure W / (pi a^2) and the punch radius; a surface: the largest pressure and the
-    radius of the largest contact area.
-    """
-    try:
-        scene = scene_of(ds)
-    except ArchiveError:
-        scene = None
-    if scene is not None and scene.geometry.shape != "surface":
-        W = float(np.max(scene.load.knots()[1]))
-        b1, b2 = scene.indenter.body(), scene.halfspace.body()
-        phi = [b.creep.phi0 if b.kind == "viscoelastic" and b.creep.phi0 > 0 else 1.0
-               for b in (b1, b2)]
-        e_star = composite_modulus(b1, b2, *phi)
-        geo = scene.geometry
-        if geo.shape == "flat_punch":
-            a = geo.radius
-            return W / (math.pi * a * a), a, ("p_m", "a")
-        if np.isfinite(e_star):
-            if geo.shape == "sphere":
-                h = analytic.hertz_sphere(W, geo.radius, e_star)
-                return h.max_pressure, h.contact_radius, ("p_H", "a_H")
-            h = analytic.hertz_ellipsoid(W, geo.radii, e_star)
-            return h.max_pressure, h.semi_axes[0], ("p_H", "a_H")
-    pmax = float(ds["p"].max())
-    amax = radius_of_area(float(ds["contact_area"].max()))
-    return (pmax if pmax > 0 else 1.0), (amax if amax > 0 else 1.0), ("p_max", "a_max")
-
-
-def _profile(da, k, rows):
-    """A field's profile along x1 through the centre at instant k."""
-    return np.asarray(da.isel(time=k, x2=rows).values, float).reshape(da.sizes["x1"], -1) \
-        .mean(axis=1)
-
-
-def _index(ds, instant) -> int:
-    """An instant as an index: an int (negative from the end) or a time [s] (a float,
-    the nearest instant)."""
-    n = ds.sizes["time"]
-    if isinstance(instant, (bool, np.bool_)) or not isinstance(
-            instant, (int, np.integer, float, np.floating)):
-        raise ValueError(f"instant {instant!r}: expected an index (int) or a time [s] "
-                         f"(float)")
-    if isinstance(instant, (float, np.floating)):
-        t = np.asarray(ds["time"].values, float)
-        return int(np.argmin(np.abs(t - float(instant))))
-    k = int(instant)
-    if not -n <= k < n:
-        raise ValueError(f"instant {k} is out of range: the archive has {n} instants "
-                         f"(0 to {n - 1}, or negative from the end)")
-    return k % n
-
-
-def _default_instants(ds, count=5):
-    """About ``count`` instants spread over the run, the turning points of T1 and the
-    last instant included (an unloaded first instant, with no shear, is left out)."""
-    n = ds.sizes["time"]
-    if n <= count:
-        return list(range(n))
-    chosen = {n - 1}
-    shear_from_zero = False
-    if "T1" in ds:
-        T = np.asarray(ds["T1"].values, float)
-        d = np.sign(np.diff(T))
-        turning = [i for i in range(1, n - 1) if d[i - 1] != 0 and d[i] != 0
-                   and d[i] != d[i - 1]]
-        if len(turning) >= count:
-            turning = [turning[int(j)] for j in
-                       np.linspace(0, len(turning) - 1, count - 1).round()]
-        chosen.update(turning)
-        shear_from_zero = bool(np.any(T != 0)) and T[0] == 0
-    grid = np.linspace(0, n - 1, count + 1)[1:] if shear_from_zero else \
-        np.linspace(0, n - 1, count)
-    candidates = sorted(set(int(k) for k in grid.round()) - chosen)
-    while len(chosen) < count and candidates:      # the candidate farthest from the rest
-        best = max(candidates, key=lambda c: min(abs(c - k) for k in chosen))
-        chosen.add(best)
-        candidates.remove(best)
-    return sorted(chosen)
-
-
-def _solution(ds) -> ClosedForm | None:
-    """The closed form to draw, or None (none applies, or it cannot be built)."""
-    try:
-        if closed_form_for(ds) is None:
-            return None
-        return closed_form_solution(ds)
-    except (ContactpipeError, ValueError):
-        return None
 
 
 # --------------------------------------------------------------------------- profiles
@@ -367,7 +167,7 @@ def _profiles(ds, ks, sol, ref, fig):
     span = t_all[-1] - t_all[0]
     for n, k in enumerate(ks):
         c, label = f"C{n % 10}", _time_label(ds, k)
-        for ax, name in zip(panels, ("p", "q1"), strict=False):
+        for ax, name in zip(panels, ("p", "q1")):
             ax.plot(x1 / aH, _profile(ds[name], k, rows) / pH, "o-", ms=3, lw=1.2,
                     color=c, label=label)
         if sol is not None:
@@ -378,7 +178,7 @@ def _profiles(ds, ks, sol, ref, fig):
     grey_label = (f"closed form ({sol.name.replace('_', '-')})" if sol is not None else
                   "reference archive" if ref is not None else None)
     grey_style = CLOSED_STYLE if sol is not None else REFERENCE_STYLE
-    for ax, name in zip(panels, ("p", "q1"), strict=False):
+    for ax, name in zip(panels, ("p", "q1")):
         if grey_label:
             ax.plot([], [], **grey_style, label=grey_label)
         ax.set_ylabel(f"{name} / {pn}")
@@ -394,13 +194,6 @@ def _profiles(ds, ks, sol, ref, fig):
     return fig
 
 
-def _scene_title(ds) -> str:
-    try:
-        return scene_of(ds).name
-    except ArchiveError:
-        return str(ds.attrs.get("title", "archive"))
-
-
 def plot_profiles(ds, instants=None, *, closed_form=True, reference=None, fig=None):
     """p/pH and q1/pH against x1/aH through the centre, at a few instants.
 
@@ -414,7 +207,7 @@ def plot_profiles(ds, instants=None, *, closed_form=True, reference=None, fig=No
         included.
     closed_form : bool
         Draw the closed form (black dashes, on top) where
-        :func:`contactpipe.pipeline.reference.closed_form_for` gives one.
+        :func:`contactpipe.pipeline.compare.reference.closed_form_for` gives one.
     reference : xarray.Dataset or path, optional
         A reference archive drawn (black dots) instead of the closed form, at its instants
         nearest in t_norm = (t - t0)/window.
@@ -527,216 +320,6 @@ def plot_maps(ds, instant=-1, *, fig=None):
         t = float(ds["time"].values[k])
         fig.suptitle(f"{_scene_title(ds)} at t = {t:.4g} s ({_time_label(ds, k)})",
                      fontsize=10)
-    return fig
-
-
-# --------------------------------------------------------------------------- series
-
-def _require_frictional(ds, what):
-    if not _frictional(ds):
-        raise ArchiveError(f"{what} needs a frictional archive (variables T1, omega1, q1); "
-                           f"this one is frictionless (models: "
-                           f"{ds.attrs.get('models', '?')})")
-
-
-def plot_hysteresis(ds, *, ax=None):
-    """The fretting loop: T1 [N] against omega1 [um], the closed form (MD) dashed on top.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset or path
-    ax : matplotlib.axes.Axes, optional
-        Draw into it; default a new figure.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-
-    Raises
-    ------
-    ArchiveError
-        The archive is frictionless (no T1, omega1).
-    """
-    with _dataset(ds) as ds:
-        _require_frictional(ds, "the hysteresis loop")
-        fig, ax = axes_of(ax)
-        om = np.asarray(ds["omega1"].values, float)
-        T = np.asarray(ds["T1"].values, float)
-        sol = _solution(ds)
-        loop = sol.loop() if sol is not None else None
-        if loop is not None:
-            ax.plot(loop[1] * 1e6, loop[0], **CLOSED_STYLE,
-                    label="closed form (Mindlin-Deresiewicz)")
-        ax.plot(om * 1e6, T, "o-", ms=3, lw=1.2, color="C0", label="numerical")
-        ax.set_xlabel("omega1 [µm]")
-        ax.set_ylabel("T1 [N]")
-        ax.axhline(0.0, color="0.85", lw=0.6, zorder=-1)
-        ax.axvline(0.0, color="0.85", lw=0.6, zorder=-1)
-        if "dissipation" in ds:
-            ax.set_title(f"{_scene_title(ds)}: tangential force against rigid displacement "
-                         f"(dissipated {float(ds['dissipation'].values[-1]):.4g} J)",
-                         fontsize=9)
-        ax.grid(True, lw=0.3, alpha=0.5)
-        ax.legend(fontsize=8)
-    return fig
-
-
-def plot_radii(ds, *, ax=None):
-    """Contact radius sqrt(A/pi) and stick radius sqrt(A_stick/pi) [mm] against time [s],
-    closed forms dashed on top where they apply.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset or path
-    ax : matplotlib.axes.Axes, optional
-        Draw into it; default a new figure.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    with _dataset(ds) as ds:
-        fig, ax = axes_of(ax)
-        t = np.asarray(ds["time"].values, float)
-        a = np.sqrt(np.asarray(ds["contact_area"].values, float) / math.pi)
-        ax.plot(t, a * 1e3, "o-", ms=3, color="C0", label="contact radius")
-        if "stick_area" in ds:
-            c = np.sqrt(np.asarray(ds["stick_area"].values, float) / math.pi)
-            ax.plot(t, c * 1e3, "s-", ms=3, color="C3", label="stick radius")
-        sol = _solution(ds)
-        if sol is not None:
-            n = t.size
-            ax.plot(t, [sol.contact_radius(k) * 1e3 for k in range(n)], **CLOSED_STYLE,
-                    label=f"closed form ({sol.name.replace('_', '-')})")
-            if sol.name == "mindlin_deresiewicz":
-                ax.plot(t, [sol.stick_radius(k) * 1e3 for k in range(n)], **CLOSED_STYLE)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("radius [mm]")
-        ax.set_ylim(bottom=0.0)
-        ax.set_title(f"{_scene_title(ds)}: radii of the circles of equal area", fontsize=9)
-        ax.grid(True, lw=0.3, alpha=0.5)
-        ax.legend(fontsize=8)
-    return fig
-
-
-# --------------------------------------------------------------------------- sweeps
-
-BASE_DIMS = ("time", "t_norm", "x1", "x2")
-MAX_LEGEND = 20             # more members than this: no legend
-
-
-def _member_label(sw, sel) -> str:
-    """'mu = 0.1, tau_ratio = 2' for one member: the coordinates along each looped
-    dimension (the dimension's own, or those along it in a zip sweep; not the digest)."""
-    parts = []
-    for d, i in sel.items():
-        names = [c for c, v in sw.coords.items()
-                 if v.dims == (d,) and c != "digest" and (c == d or c not in sw.dims)]
-        names.sort(key=lambda c: c != d)
-        if not names:
-            parts.append(f"{d} = {i}")
-        parts += [f"{c} = {_value_text(sw[c].values[i])}" for c in names]
-    return ", ".join(parts) or "sweep"
-
-
-def _value_text(v):
-    v = v.item() if hasattr(v, "item") else v
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    return str(v)
-
-
-#: SI units shown in a unit of the contact's size: (factor to multiply by, label).
-DISPLAY_UNITS = {"m2": (1e6, "mm²"), "m": (1e6, "µm"), "J": (1e6, "µJ"),
-                 "Pa": (1e-6, "MPa"), "N m": (1e3, "N mm")}
-
-
-def _display_unit(units):
-    """(factor, label) to show values in ``units`` (SI) at the contact's scale."""
-    return DISPLAY_UNITS.get(units, (1.0, "" if units in ("", "1") else units))
-
-
-def _axis_labels(ax, sw, variable, xname, reduced):
-    known = VARIABLES.get(variable, {})
-    units = sw[variable].attrs.get("units", known.get("units", ""))
-    long = sw[variable].attrs.get("long_name", known.get("long_name", variable))
-    unit = _display_unit(units)[1]
-    ylab = f"{'max over x1, x2 of ' if reduced else ''}{long}" \
-        + (f" [{unit}]" if unit else "")
-    ax.set_ylabel(ylab, fontsize=9)
-    xunits = sw[xname].attrs.get("units", "") if xname in sw.variables else ""
-    if xname == "t_norm":
-        ax.set_xlabel("t / τ (dimensionless time)")
-    else:
-        ax.set_xlabel(f"{xname}" + (f" [{xunits}]" if xunits else ""))
-
-
-def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
-    """One curve of ``variable`` per member of a combined sweep Dataset.
-
-    Parameters
-    ----------
-    sw : xarray.Dataset or path
-        A sweep (:func:`contactpipe.open_sweep`, or its folder): archives combined along
-        one dimension per swept parameter; the dimensions beyond time/t_norm/x1/x2 are
-        looped over (all their combinations).
-    variable : str
-        A series (over time). A field is reduced to its largest value over x1, x2.
-        Shown at the contact's scale (:data:`DISPLAY_UNITS`: an area in mm², a length in
-        µm, an energy in µJ, a stress in MPa), labelled by its long name and unit.
-    x : str
-        The abscissa; ``"time"`` uses ``t_norm`` when the sweep has it (members with
-        different windows are aligned on it).
-    ax : matplotlib.axes.Axes, optional
-        Draw into it; default a new figure.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-
-    Raises
-    ------
-    ArchiveError
-        ``variable`` or ``x`` is not in the sweep.
-    """
-    with _opened(sw, "sweep") as sw:
-        if variable not in sw:
-            raise ArchiveError(f"variable {variable!r} is not in the sweep; it has: "
-                               f"{', '.join(sorted(map(str, sw.data_vars)))}")
-        da = sw[variable]
-        reduced = [d for d in ("x1", "x2") if d in da.dims]
-        if reduced:
-            da = da.max(reduced)
-        has_t_norm = "t_norm" in sw.coords or "t_norm" in sw.dims
-        xname = "t_norm" if (x == "time" and has_t_norm) else x
-        if xname not in sw.coords and xname not in sw.dims and xname not in sw:
-            raise ArchiveError(f"x = {x!r} is not a coordinate of the sweep")
-        extra = [d for d in da.dims if d not in BASE_DIMS]
-        factor = _display_unit(sw[variable].attrs.get(
-            "units", VARIABLES.get(variable, {}).get("units", "")))[0]
-        fig, ax = axes_of(ax)
-        combos = list(itertools.product(*[range(da.sizes[d]) for d in extra])) \
-            if extra else [()]
-        xs_all = sw[xname] if xname in sw.variables else None
-        for n, combo in enumerate(combos):
-            sel = dict(zip(extra, combo, strict=True))
-            y = da.isel(sel) if sel else da
-            xv = y[xname] if xs_all is None else \
-                xs_all.isel({d: i for d, i in sel.items() if d in xs_all.dims})
-            xv = np.asarray(xv.values, float).ravel()
-            yv = np.asarray(y.values, float).ravel() * factor
-            if xv.size != yv.size:
-                raise ArchiveError(f"x = {xname!r} does not run along {variable!r} "
-                                   f"({xv.size} values against {yv.size})")
-            ax.plot(xv, yv, "-", marker="o" if yv.size <= 30 else None, ms=3, lw=1.2,
-                    color=f"C{n % 10}", label=_member_label(sw, sel))
-        _axis_labels(ax, sw, variable, xname, reduced)
-        ax.ticklabel_format(axis="y", useOffset=False)
-        ax.grid(True, lw=0.3, alpha=0.5)
-        if len(combos) <= MAX_LEGEND:
-            ax.legend(fontsize=7, ncol=1 if len(combos) <= 8 else 2)
-        ax.set_title(f"sweep over {', '.join(extra) if extra else '(no axis)'}: {variable} "
-                     f"({len(combos)} members)", fontsize=9)
     return fig
 
 

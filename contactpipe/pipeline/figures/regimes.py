@@ -4,11 +4,11 @@
 loop (T1 against the imposed omega1) and classifies it by Fouvry's energy ratio
 (:mod:`contactpipe.post.fretting`: partial slip, mixed or gross slip), beside the closed-form
 regime of Mindlin's elastic sphere (delta* against delta_gs). :func:`write_regime_table`
-writes the table as CSV; :mod:`contactpipe.pipeline.plot_fretting` draws the map.
+writes the table as CSV; :mod:`contactpipe.pipeline.figures.fretting` draws the map.
 
 A sweep for a map varies the displacement amplitude (the derived parameters
 ``delta_amplitude`` [m] or ``delta_ratio`` = delta*/delta_gs of
-:mod:`contactpipe.pipeline.parameters`) against ``friction.mu`` or
+:mod:`contactpipe.pipeline.sweep.parameters`) against ``friction.mu`` or
 ``load.normal_force``, on a base scene with a displacement-controlled program such as
 ``tangential_displacement = [0, 1, -1, 1]`` (x 1e-6 m) over ``time = [0, 1, 3, 5]``.
 """
@@ -21,13 +21,13 @@ import pathlib
 import numpy as np
 import xarray as xr
 
-from ..exceptions import ArchiveError
-from .._util.files import atomic_path, check_output_dir, check_output_path, make_folder
-from ..post.fretting import boundary_constants, fretting_regime
-from .combine import open_member
-from .inputs import scene_of
-from .manifest import read_manifest
-from .members import coord_value, label_of
+from ...exceptions import ArchiveError
+from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from ...post.fretting import boundary_constants, fretting_regime
+from ..sweep.combine import open_member
+from ..inputs import scene_of
+from ..sweep.manifest import read_manifest
+from ..sweep.members import coord_value, label_of
 
 __all__ = ["fretting_map", "write_regime_table", "COLUMNS"]
 
@@ -44,6 +44,25 @@ COLUMNS = (
     ("energy_ratio_closed_form", "1", "Mindlin-Deresiewicz A at delta* / delta_gs"),
     ("cycles", "1", "closed cycles in the loop"),
 )
+
+
+def _classified(sweep_dir, done):
+    """[(member, its FrettingRegime)] of the finished members, and the set of their
+    boundary constants (:func:`boundary_constants`)."""
+    rows, constants = [], set()
+    for m in done:
+        ds = open_member(sweep_dir, m)
+        try:
+            try:
+                r = fretting_regime(ds)
+            except ArchiveError as err:
+                raise ArchiveError(f"sweep member {label_of(m['values'])} ({m['file']}): "
+                                   f"{err}") from None
+            constants.add(boundary_constants(scene_of(ds)))
+        finally:
+            ds.close()
+        rows.append((m, r))
+    return rows, constants
 
 
 def fretting_map(sweep_dir) -> xr.Dataset:
@@ -78,19 +97,7 @@ def fretting_map(sweep_dir) -> xr.Dataset:
     if not done:
         raise ArchiveError(f"{sweep_dir}: no member of the sweep is done; run the sweep "
                            f"first")
-    rows, constants = [], set()
-    for m in done:
-        ds = open_member(sweep_dir, m)
-        try:
-            try:
-                r = fretting_regime(ds)
-            except ArchiveError as err:
-                raise ArchiveError(f"sweep member {label_of(m['values'])} ({m['file']}): "
-                                   f"{err}") from None
-            constants.add(boundary_constants(scene_of(ds)))
-        finally:
-            ds.close()
-        rows.append((m, r))
+    rows, constants = _classified(sweep_dir, done)
     data = {}
     values = {
         "mu": [r.friction_coefficient for _, r in rows],

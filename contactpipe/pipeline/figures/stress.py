@@ -16,16 +16,16 @@ default field is the criterion's main one (attribute ``criterion_field``) when t
 one, else von Mises. Axes in mm, stresses in MPa (dimensionless indices as they are);
 the colour bars name the field in mathtext (:data:`MATH_LABELS`).
 
-The conventions of :mod:`contactpipe.pipeline.plot`, which draws these as its ``stress``
+The conventions of :mod:`contactpipe.pipeline.figures.plot`, which draws these as its ``stress``
 kind: every function takes ``ax=None`` / ``fig=None`` and returns the Figure; a new figure
 is 8 x 5 in at 100 dpi with a tight layout, never attached to pyplot; figures are written
-by :func:`contactpipe.pipeline.plot.save_figure` (atomic, 800 x 500 pixels).
+by :func:`contactpipe.pipeline.figures.plot.save_figure` (atomic, 800 x 500 pixels).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .inputs import centre_rows
+from ..inputs import centre_rows
 
 __all__ = ["plot_stress_section", "plot_stress_surface", "plot_stress", "default_field"]
 

@@ -14,10 +14,10 @@ import pathlib
 import numpy as np
 import xarray as xr
 
-from ..archive import open_archive
-from ..exceptions import ArchiveError
-from ..nomenclature import cf_attrs
-from .inputs import scene_digest
+from ...archive import open_archive
+from ...exceptions import ArchiveError
+from ...nomenclature import cf_attrs
+from ..inputs import scene_digest
 from .manifest import MANIFEST, read_manifest
 from .members import coord_value, label_of
 
@@ -205,7 +205,7 @@ def open_sweep(out_dir, *, allow_missing=False, chunks=None) -> xr.Dataset:
     ----------
     out_dir : path-like
         A folder written by :func:`~contactpipe.pipeline.sweep.sweep` (its
-        ``manifest.json``, checked: :func:`~contactpipe.pipeline.manifest.read_manifest`).
+        ``manifest.json``, checked: :func:`~contactpipe.pipeline.sweep.manifest.read_manifest`).
     allow_missing : bool
         Drop members that failed or were never run (listed in the attribute
         ``missing_members``) instead of raising. In mode "product" a dropped member

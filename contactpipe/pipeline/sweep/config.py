@@ -53,14 +53,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..exceptions import SceneError
-from ..post.fatigue import CRITERIA
-from .._util.files import read_toml
-from ..nomenclature import SERIES, VARIABLES
-from ..scene import Scene
-from ..scene.parts import MAX_SIDE
-from ..post.stress import BODIES, MAX_DEPTH_SIDES
-from ..scene.tables import Field, Reader, did_you_mean, nesting_depth, show
+from ...exceptions import SceneError
+from ...post.fatigue import CRITERIA
+from ..._util.files import read_toml
+from ...nomenclature import SERIES, VARIABLES
+from ...scene import Scene
+from ...scene.parts import MAX_SIDE
+from ...post.stress import BODIES, MAX_DEPTH_SIDES
+from ...scene.tables import Field, Reader, did_you_mean, nesting_depth, show
 from .members import MODES
 
 __all__ = ["SweepFile", "PipelineSpec", "StressSpec", "read_sweep_file", "load_sweep_file",

@@ -10,13 +10,13 @@
 The stage is in several modules, this one the entry point (every public name of the
 stage can be imported from here):
 
-- :mod:`~contactpipe.pipeline.parameters`: derived parameters (``tau_ratio``,
+- :mod:`~contactpipe.pipeline.sweep.parameters`: derived parameters (``tau_ratio``,
   :func:`register_parameter`);
-- :mod:`~contactpipe.pipeline.members`: axes parsed into members, each a validated scene;
-- :mod:`~contactpipe.pipeline.manifest`: ``manifest.json``, written and validated;
-- :mod:`~contactpipe.pipeline.execute`: where the members run and where their archives
+- :mod:`~contactpipe.pipeline.sweep.members`: axes parsed into members, each a validated scene;
+- :mod:`~contactpipe.pipeline.sweep.manifest`: ``manifest.json``, written and validated;
+- :mod:`~contactpipe.pipeline.sweep.execute`: where the members run and where their archives
   are written;
-- :mod:`~contactpipe.pipeline.combine`: :func:`open_sweep`;
+- :mod:`~contactpipe.pipeline.sweep.combine`: :func:`open_sweep`;
 - this module: :func:`sweep` (resuming included) and the command line.
 
 Axes
@@ -26,7 +26,7 @@ An axis name is either a dotted path into the scene (``"friction.mu"``,
 :meth:`Scene.replace`) or a *derived parameter* registered by name: ``tau_ratio`` (the
 load window as a multiple of the relaxation time), ``delta_amplitude`` and ``delta_ratio``
 (the amplitude of a displacement-controlled tangential program, in metres or over the
-gross-slip displacement); each is documented in :mod:`contactpipe.pipeline.parameters`.
+gross-slip displacement); each is documented in :mod:`contactpipe.pipeline.sweep.parameters`.
 
 Users register their own with :func:`register_parameter`, or give an axis as
 ``(values, func)`` for an ad-hoc one; ``func(scene, value)`` returns the new
@@ -45,7 +45,7 @@ Files in ``out_dir``
 ``manifest.json``
     Axes, mode, dimension names, the base scene (TOML) and, per member, its axis values,
     digest, file, status (``done`` / ``failed`` with a one-line error / ``pending``) and
-    wall time (:mod:`~contactpipe.pipeline.manifest`). Rewritten atomically as members
+    wall time (:mod:`~contactpipe.pipeline.sweep.manifest`). Rewritten atomically as members
     finish; checked on every read, so a manifest edited by hand is refused with one line
     naming the key instead of a bare KeyError.
 ``.sweep.lock``
@@ -90,7 +90,7 @@ The workers need not share the client's disk: with ``shared_disk=None`` (the def
 the workers of a LocalCluster (or of ``"synchronous"``) write the archives into
 ``out_dir`` themselves, and those of any other cluster simulate into a temporary folder
 of their own and send the archive back, which the client checks and writes
-(:mod:`~contactpipe.pipeline.execute`; ``shared_disk=True`` lets the workers of a shared
+(:mod:`~contactpipe.pipeline.sweep.execute`; ``shared_disk=True`` lets the workers of a shared
 filesystem write in place and spares the transfer).
 
 **A scheduler address is trusted code.** dask's protocol unpickles what the scheduler
@@ -131,17 +131,17 @@ import stat
 import sys
 import time
 
-from ..planning.accuracy import resolve_accuracy
-from ..archive import open_archive
-from ..exceptions import ArchiveError, SceneError, one_line
-from .._util.files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
+from ...planning.accuracy import resolve_accuracy
+from ...archive import open_archive
+from ...exceptions import ArchiveError, SceneError, one_line
+from ..._util.files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
                      make_folder)
-from ..planning import check_time, estimate_resources
-from ..scene import Scene
+from ...planning import check_time, estimate_resources
+from ...scene import Scene
 from .combine import open_member, open_sweep
 from .config import SweepFile, load_sweep_file, read_sweep_file
 from .execute import SYNCHRONOUS, execute
-from .inputs import scene_digest
+from ..inputs import scene_digest
 from .manifest import (MANIFEST, new_manifest, previous_records, read_manifest,
                        write_manifest)
 from .members import MODES, Member, build_members, dim_names, label_of
@@ -413,43 +413,53 @@ def sweep(base, axes: dict, out_dir, *, mode="product", client=None, scheduler=N
     _refuse_in_reimport()
     t0 = time.perf_counter()
     out_dir = check_output_dir(out_dir, "sweep output folder", inputs=_paths(base))
-    if not isinstance(base, Scene):
-        base = Scene.from_toml(base)
+    base = base if isinstance(base, Scene) else Scene.from_toml(base)
     names, values, funcs, members = build_members(base, axes, mode)
     _check_run_times(members)
     out_dir = out_dir.resolve()
     make_folder(out_dir)
     with exclusive_lock(out_dir / LOCK, "sweep", error=SweepLockedError):
-        _clean_temporaries(out_dir, members)
-        by_digest: dict[str, list] = {}
-        for m in members:
-            by_digest.setdefault(m.digest, []).append(m)
-        previous, created = previous_records(out_dir)
-        jobs, skipped, set_aside = _resume(out_dir, by_digest, previous)
-        manifest = new_manifest(base, mode, names, values, funcs, dim_names(names),
-                                members, created)
-        write_manifest(out_dir, manifest)
-        computed, failed = [], []
-
-        def on_done(res):
-            group = by_digest[res["digest"]]
-            for m in group:
-                m.status = res["status"]
-                m.error = res.get("error")
-                m.wall_time_s = res.get("wall_time_s")
-                m.cpu_time_s = res.get("cpu_time_s")
-            (computed if res["status"] == "done" else failed).extend(group)
-            write_manifest(out_dir, manifest, members)
-
-        execute(jobs, client=client, scheduler=scheduler, n_workers=n_workers,
-                threads_per_worker=threads_per_worker, progress=progress,
-                retries=int(retries or 0), shared_disk=shared_disk, on_done=on_done)
-    order = {id(m): m.index for m in members}
-    for lst in (computed, failed, skipped):
-        lst.sort(key=lambda m: order[id(m)])
+        manifest, computed, failed, skipped, set_aside = _run_members(
+            out_dir, members, (base, mode, names, values, funcs), client=client,
+            scheduler=scheduler, n_workers=n_workers, threads_per_worker=threads_per_worker,
+            progress=progress, retries=int(retries or 0), shared_disk=shared_disk)
     return SweepResult(out_dir=out_dir, manifest=manifest, members=members,
                        computed=computed, skipped=skipped, failed=failed,
                        wall_time_s=time.perf_counter() - t0, set_aside=set_aside)
+
+
+def _run_members(out_dir, members, new_manifest_args, **execute_kw):
+    """Under the folder's lock: clear what a killed sweep left, resume from the previous
+    manifest, write the new one, and run the members still to do, recording each in the
+    manifest as it ends. Returns (manifest, computed, failed, skipped, set_aside), each
+    list in sweep order."""
+    _clean_temporaries(out_dir, members)
+    by_digest: dict[str, list] = {}
+    for m in members:
+        by_digest.setdefault(m.digest, []).append(m)
+    previous, created = previous_records(out_dir)
+    jobs, skipped, set_aside = _resume(out_dir, by_digest, previous)
+    base, mode, names, values, funcs = new_manifest_args
+    manifest = new_manifest(base, mode, names, values, funcs, dim_names(names),
+                            members, created)
+    write_manifest(out_dir, manifest)
+    computed, failed = [], []
+
+    def on_done(res):
+        group = by_digest[res["digest"]]
+        for m in group:
+            m.status = res["status"]
+            m.error = res.get("error")
+            m.wall_time_s = res.get("wall_time_s")
+            m.cpu_time_s = res.get("cpu_time_s")
+        (computed if res["status"] == "done" else failed).extend(group)
+        write_manifest(out_dir, manifest, members)
+
+    execute(jobs, on_done=on_done, **execute_kw)
+    order = {id(m): m.index for m in members}
+    for lst in (computed, failed, skipped):
+        lst.sort(key=lambda m: order[id(m)])
+    return manifest, computed, failed, skipped, set_aside
 
 
 def _paths(*objs) -> list:

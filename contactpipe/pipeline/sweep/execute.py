@@ -51,11 +51,11 @@ import time
 
 from tqdm.auto import tqdm
 
-from ..archive import open_archive
-from ..exceptions import ArchiveError, ContactpipeError, one_line
-from .._util.files import atomic_path
-from ..simulation import simulate
-from .inputs import scene_digest
+from ...archive import open_archive
+from ...exceptions import ArchiveError, ContactpipeError, one_line
+from ..._util.files import atomic_path
+from ...simulation import simulate
+from ..inputs import scene_digest
 
 __all__ = ["execute", "run_member", "land_member", "dask_client", "workers_share_disk",
            "scratch_root", "clean_scratch", "SYNCHRONOUS", "SCRATCH_PREFIX"]

@@ -3,7 +3,7 @@
 An axis name is either a dotted path into the scene (``"friction.mu"``,
 ``"load.normal_force"``, ``"halfspace.relaxation_time"``, ``"time.steps"``; see
 :meth:`Scene.replace`) or a derived parameter registered by name
-(:mod:`contactpipe.pipeline.parameters`), or given as ``(values, func)``. Within a member,
+(:mod:`contactpipe.pipeline.sweep.parameters`), or given as ``(values, func)``. Within a member,
 the dotted paths are applied first (all at once), then the derived parameters in axis
 order, so ``tau_ratio`` sees a swept relaxation time.
 
@@ -18,9 +18,9 @@ import itertools
 import json
 import numbers
 
-from ..exceptions import SceneError
-from ..nomenclature import COORDINATES, VARIABLES
-from ..scene import Scene
+from ...exceptions import SceneError
+from ...nomenclature import COORDINATES, VARIABLES
+from ...scene import Scene
 from .parameters import derived_parameters, registered
 
 __all__ = ["Member", "build_members", "dim_names", "jsonable", "show_value", "label_of",

@@ -1,7 +1,7 @@
 """Derived sweep parameters: axes that are not a dotted scene path.
 
 A derived parameter is a function ``func(scene, value) -> Scene`` registered by name;
-the sweep applies it to every member (:mod:`contactpipe.pipeline.members`). Built in:
+the sweep applies it to every member (:mod:`contactpipe.pipeline.sweep.members`). Built in:
 
 ``tau_ratio``
     The load window tau = ``tau_ratio`` x the relaxation time of the first viscoelastic
@@ -29,8 +29,8 @@ import math
 import numbers
 from collections.abc import Callable
 
-from ..exceptions import SceneError
-from ..post.fretting import closed_form_boundary
+from ...exceptions import SceneError
+from ...post.fretting import closed_form_boundary
 
 __all__ = ["register_parameter", "derived_parameters", "registered", "relaxation_time",
            "with_window", "tau_ratio", "with_amplitude", "delta_amplitude", "delta_ratio"]
