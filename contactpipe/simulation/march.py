@@ -349,16 +349,16 @@ def _start(pb, path, attrs, ckpt):
                                        resume_steps=written, **kw)
                 warnings.warn(ResumeNotice(f"{path.name}: resuming from {_instant(pb, k)}, "
                                            f"its checkpoint ({written} instants written)"),
-                              stacklevel=4)
+                              stacklevel=5)
                 return writer, st
             if found:
                 warnings.warn(ResumeNotice(f"{path.name}: no checkpoint of this scene to "
                                            f"resume from; starting from the first instant"),
-                              stacklevel=4)
+                              stacklevel=5)
         except (ArchiveError, ValueError, KeyError) as e:
             warnings.warn(ResumeWarning(f"{path}: the resume state is damaged "
                                         f"({one_line(e, with_type=False)}); starting afresh"),
-                          stacklevel=4)
+                          stacklevel=5)
             ckpt.discard()
             st = State.initial(pb.grid.shape, pb.ops.new_memories())
     return ArchiveWriter(path, pb.grid.x1, pb.grid.x2, names, attrs, resumable=ckpt is not None,
