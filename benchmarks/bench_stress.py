@@ -81,8 +81,8 @@ def transforms(ds, depths):
 
 
 def wall_times(ds, depths):
-    from contactpipe.solver.subsurface import SubsurfaceOperator, clear_cache
     from contactpipe.post.stress import save_stress, subsurface_stress
+    from contactpipe.solver.subsurface import SubsurfaceOperator, clear_cache
     n1, n2 = ds.sizes["x1"], ds.sizes["x2"]
     d = float(ds["x1"][1] - ds["x1"][0])
     clear_cache()
@@ -117,8 +117,8 @@ def tamaas_side_by_side(ds, depths, a, p0, ours_per_instant):
     except ImportError as err:
         print(f"3. Tamaas not importable ({err}); pip install tamaas (optional extra 'bench')")
         return
-    from contactpipe.solver.subsurface import COMPONENTS
     from contactpipe.post.stress import subsurface_stress
+    from contactpipe.solver.subsurface import COMPONENTS
     n = ds.sizes["x1"]
     d = float(ds["x1"][1] - ds["x1"][0])
     k = ds.sizes["time"] // 4                     # an instant with shear

@@ -65,7 +65,7 @@ QUICK = dict(normal=[16], fretting=[16], fretting_steps=10, fig3=(16, 10), memor
 def fig3_study(n, steps):
     """The two runs of studies/fig3_maxwell.py (its scenes, its archives streamed to disk),
     each timed: records like bench's."""
-    import _common as c            # studies/_common.py: the study's scene, built the same way
+    import _common as c  # studies/_common.py: the study's scene, built the same way
     import fig3_maxwell as study
     rows = []
     print(f"studies/fig3_maxwell.py: {n}², {steps} steps per window, archive written")

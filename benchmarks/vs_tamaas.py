@@ -39,8 +39,8 @@ import time
 import numpy as np
 
 from contactpipe.analytic import hertz_sphere
-from contactpipe.scene.geometry import sphere_gap
 from contactpipe.materials import Body
+from contactpipe.scene.geometry import sphere_gap
 from contactpipe.solver.normal import solve_normal
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
 
@@ -150,7 +150,7 @@ def main(argv=None):
                         help="leave out the plain Polonsky-Keer CG (the solver of before)")
     args = parser.parse_args(argv)
     try:
-        import tamaas as tm                          # optional: the 'bench' extra
+        import tamaas as tm  # optional: the 'bench' extra
         tm.set_log_level(tm.LogLevel.error)
         version = tm.__version__
     except ImportError as err:

@@ -20,8 +20,14 @@ import sys
 import types
 
 from ._version import __version__
-from .exceptions import (ArchiveError, ContactpipeError, ConvergenceError, GridError,
-                         GrossSlidingError, SceneError)
+from .exceptions import (
+    ArchiveError,
+    ContactpipeError,
+    ConvergenceError,
+    GridError,
+    GrossSlidingError,
+    SceneError,
+)
 
 #: Public names and the modules that define them, imported on first use (module
 #: ``__getattr__``): ``import contactpipe`` stays light (no xarray, dask, scipy, pyfftw),

@@ -1,5 +1,6 @@
 """The package version, from the installed metadata (nothing internal imported)."""
-from importlib.metadata import PackageNotFoundError, version as _metadata_version
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as _metadata_version
 
 try:
     __version__ = _metadata_version("contactpipe")

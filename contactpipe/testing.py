@@ -20,13 +20,12 @@ Laws checked at every recorded instant (docs/conventions.md for the signs):
 """
 from __future__ import annotations
 
-
 import numpy as np
 
 from . import analytic
-from .scene.loading import FREEDOMS
 from .materials import kelvin_voigt, maxwell, prony, zener
 from .scene import Scene
+from .scene.loading import FREEDOMS
 
 __all__ = ["contact_law_violations", "assert_contact_laws", "tiny_scene", "TINY_SCENES",
            "creep_laws", "zigzag", "lee_radok_measures"]

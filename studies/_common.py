@@ -26,9 +26,8 @@ import time
 # studies/README.md, 'Findings'). Has no effect when numpy is already imported.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-
 import matplotlib
+import numpy as np  # noqa: E402
 
 matplotlib.use("Agg")
 

@@ -36,8 +36,6 @@ expectation.
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import csv
 import math
 import sys
@@ -45,11 +43,13 @@ import time
 import traceback
 from dataclasses import dataclass, field
 
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
 import numpy as np
 
 import contactpipe as cp
 from contactpipe import analytic as an
-from contactpipe.materials import kelvin_voigt as kv_creep, maxwell as maxwell_creep
+from contactpipe.materials import kelvin_voigt as kv_creep
+from contactpipe.materials import maxwell as maxwell_creep
 from contactpipe.testing import contact_law_violations
 
 FORCE_TOL = 1e-8          # |reached - applied| / W

@@ -13,15 +13,12 @@ Writes ``fig1_loading.png`` and ``fig1_loading.nc`` (the program on the mesh: ti
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import sys
 
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
+import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-
-import matplotlib.pyplot as plt
-
 
 INSTANTS = (0.2, 0.4, 0.6, 0.8, 1.0)   # t/tau of the profiles in figures 2 and 3
 

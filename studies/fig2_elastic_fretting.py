@@ -18,13 +18,11 @@ error summary against the closed forms (measured as in tests/test_tangential.py)
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import sys
 
-import numpy as np
-
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
 import matplotlib.pyplot as plt
+import numpy as np
 
 from contactpipe import analytic as an
 from contactpipe.pipeline.compare import compare

@@ -28,13 +28,11 @@ estimate with the most compliant phi over the window), 200 steps per window (qui
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import sys
 
-import numpy as np
-
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
 import matplotlib.pyplot as plt
+import numpy as np
 
 from contactpipe import analytic as an
 from contactpipe.materials import maxwell as maxwell_creep

@@ -20,14 +20,12 @@ closed-form boundary, and A against delta*/delta_gs) and prints the summary.
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import sys
 import time
 
-import numpy as np
-
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
 import matplotlib.pyplot as plt
+import numpy as np
 
 import contactpipe as cp
 from contactpipe.pipeline.figures.fretting import plot_energy_ratio, plot_fretting_map

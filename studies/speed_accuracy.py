@@ -70,23 +70,22 @@ from run to run, so the FFT pairs (deterministic) are recorded too.
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import csv
 import json
 import math
 import sys
 import time
 
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
+import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
-
-import matplotlib.pyplot as plt
 from matplotlib.ticker import NullFormatter
 
 import contactpipe as cp
-from contactpipe.materials import (kelvin_voigt as kelvin_voigt_creep, maxwell as maxwell_creep,
-                                   zener as zener_creep)
+from contactpipe.materials import kelvin_voigt as kelvin_voigt_creep
+from contactpipe.materials import maxwell as maxwell_creep
+from contactpipe.materials import zener as zener_creep
 from contactpipe.solver.memory import resolve_rule
 
 GRIDS = (16, 24, 32, 48, 64, 96, 128, 192, 256)

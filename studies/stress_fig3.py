@@ -25,12 +25,11 @@ x 7 variables, is 0.5 GB even in float32: ``contactpipe stress`` writes it when 
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import shutil
 import sys
 import time
 
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
 import numpy as np
 
 import contactpipe as cp

@@ -53,17 +53,15 @@ rules of the package are memories built here and handed to ``cp.simulate`` by re
 """
 from __future__ import annotations
 
-import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
-
 import contextlib
 import csv
 import math
 import sys
 import tempfile
 
-import numpy as np
-
+import _common as c  # noqa: I001  (first: it pins the BLAS threads before numpy loads)
 import matplotlib.pyplot as plt
+import numpy as np
 
 import contactpipe as cp
 import contactpipe.simulation.problem as simulation_module

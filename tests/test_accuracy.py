@@ -1,11 +1,10 @@
 """Accuracy presets choose the grid and the steps, and the archive says so."""
 import numpy as np
 import pytest
+from helpers import fretting_scene
 
 import contactpipe as cp
 from contactpipe.planning.accuracy import PRESETS, resolve_accuracy
-
-from helpers import fretting_scene
 
 
 def test_presets_order_and_choice_recorded():

@@ -1,13 +1,12 @@
 """Tests of the closed-form solutions in contactpipe.analytic."""
 import numpy as np
 import pytest
+from helpers import md_circles, radial_force
 from scipy import integrate
 
 from contactpipe import analytic as an
 from contactpipe import materials as mat
 from contactpipe.exceptions import GrossSlidingError
-
-from helpers import md_circles, radial_force
 
 # the paper's steel-on-steel case
 E_STEEL, NU_STEEL = 210e9, 0.3

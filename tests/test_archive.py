@@ -16,8 +16,14 @@ import xarray as xr
 
 import contactpipe as cp
 from contactpipe.archive import (
-    ArchiveWriter, MemoryWriter, content_problems, is_complete, open_archive, save,
-    to_dataset, validate,
+    ArchiveWriter,
+    MemoryWriter,
+    content_problems,
+    is_complete,
+    open_archive,
+    save,
+    to_dataset,
+    validate,
 )
 from contactpipe.exceptions import ArchiveError
 from contactpipe.nomenclature import VARIABLES

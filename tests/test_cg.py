@@ -10,15 +10,22 @@ non-expansiveness), partly by hypothesis.
 """
 import numpy as np
 import pytest
+from helpers import box_kkt_violation, box_qp_exact, spd_matrix
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 
-from contactpipe.solver.cg import (BoxOptions, ComponentSums, Constraints, Start, box_cg, fista,
-                                   project_box_sum, project_rows)
+from contactpipe.solver.cg import (
+    BoxOptions,
+    ComponentSums,
+    Constraints,
+    Start,
+    box_cg,
+    fista,
+    project_box_sum,
+    project_rows,
+)
 from contactpipe.solver.ledger import Ledger
-
-from helpers import box_kkt_violation, box_qp_exact, spd_matrix
 
 
 class Counted:

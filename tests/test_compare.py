@@ -8,15 +8,14 @@ import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
+from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, fretting_scene, make_scene
 
 import contactpipe as cp
 from contactpipe import analytic as an
+from contactpipe.exceptions import ArchiveError, SceneError
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.pipeline.compare import compare
 from contactpipe.pipeline.compare.reference import closed_form_for, iwan_dissipation
-from contactpipe.exceptions import ArchiveError, SceneError
-
-from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, fretting_scene, make_scene
 
 MD_VARIABLES = ("err_p_max", "err_p_rms", "err_contact_radius", "err_omega3", "err_q1_max",
                 "err_q1_max_interior", "err_q1_rms", "err_stick_radius_cells", "err_omega1",

@@ -6,13 +6,12 @@ Steel on steel, R = 18 mm, W = 1 kN (Hertz a = 0.489 mm), mu = 0.1 unless said.
 """
 import numpy as np
 import pytest
+from helpers import A_HERTZ, MU, R, W, make_scene
 
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.pipeline.compare import compare, write_table
 from contactpipe.pipeline.compare.reference import closed_form_for, closed_form_solution, diagnose
-
-from helpers import A_HERTZ, MU, R, W, make_scene
 
 C_SUM = an.tangential_compliance_sum(210e9, 0.3, 210e9, 0.3)
 D_GS = an.gross_slip_displacement(MU, W, A_HERTZ, C_SUM)

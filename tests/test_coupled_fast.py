@@ -17,14 +17,13 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import A_HERTZ, MU, P0_HERTZ, W, fretting_scene, make_scene
 
 import contactpipe as cp
 from contactpipe.solver import coupling, joint
 from contactpipe.solver.cg import BlockSums, BoxOptions, box_cg
 from contactpipe.solver.coupling import Previous, follow_bound
 from contactpipe.solver.options import TUNING
-
-from helpers import A_HERTZ, MU, P0_HERTZ, W, fretting_scene, make_scene
 
 #: The block Gauss-Seidel passes alone (no joint solve).
 NO_JOINT = replace(TUNING, joint=False)
@@ -348,8 +347,10 @@ def test_joint_solve_ends_with_an_exact_product(monkeypatch):
     with defer = 0, and ω3 is the mean of the exact gap over the contact cells (its
     multiplier) to 1e-12. (The answer itself is compared at the default defer, above: a
     search that never sees its projections is not the solver's.)"""
+    from test_coupling import ALUMINIUM as AL
+    from test_coupling import STEEL, W, instant
+
     from contactpipe.solver.normal import solve_normal
-    from test_coupling import ALUMINIUM as AL, STEEL, W, instant
     op, gap, U, cell, _, _ = instant(STEEL, AL)
     start = solve_normal(op, gap, W, cell, np.zeros_like(gap), 1e-3, 2000).p
     b = np.stack([gap + U[2], U[0]])
@@ -374,8 +375,10 @@ def test_joint_vector_solve_ends_with_an_exact_product():
     T = (0.3, 0.2) μW at tolerance 1e-6): its A x is the product of its own (p, q) to
     1e-13 of its largest, ω3 the mean of the exact gap over the contact cells to 1e-12, and
     |q| within the bound of the last pass."""
+    from test_coupling import ALUMINIUM as AL
+    from test_coupling import STEEL, W, instant
+
     from contactpipe.solver.normal import solve_normal
-    from test_coupling import ALUMINIUM as AL, STEEL, W, instant
     op, gap, U, cell, _, _ = instant(STEEL, AL, tangential="vector")
     start = solve_normal(op, gap, W, cell, np.zeros_like(gap), 1e-3, 2000).p
     b = np.stack([gap + U[2], U[0], U[1]])
@@ -458,8 +461,10 @@ def test_joint_vector_solve_folds_its_corrections_into_its_steps():
     three inverse transforms per iteration and three for the first A x (steel on
     aluminium, 32², T = (0.3, 0.2) μW, tolerance 1e-8); its A x is the product of its own
     (p, q) to 1e-13 of its largest."""
+    from test_coupling import ALUMINIUM as AL
+    from test_coupling import STEEL, W, instant
+
     from contactpipe.solver.normal import solve_normal
-    from test_coupling import ALUMINIUM as AL, STEEL, W, instant
     op, gap, U, cell, _, _ = instant(STEEL, AL, tangential="vector")
     start = solve_normal(op, gap, W, cell, np.zeros_like(gap), 1e-3, 2000).p
     b = np.stack([gap + U[2], U[0], U[1]])
@@ -487,8 +492,10 @@ def test_scalar_joint_steps_fold_their_projection_products():
     and spends two inverse transforms per iteration and two for its first A x: the final
     state, q1 on its own pressure's bound, rides on the last step too, and A x is the
     product of that (p, q1) to 1e-13 of its largest."""
+    from test_coupling import ALUMINIUM as AL
+    from test_coupling import STEEL, W, instant
+
     from contactpipe.solver.normal import solve_normal
-    from test_coupling import ALUMINIUM as AL, STEEL, W, instant
     op, gap, U, cell, _, _ = instant(STEEL, AL)
     start = solve_normal(op, gap, W, cell, np.zeros_like(gap), 1e-3, 2000).p
     b = np.stack([gap + U[2], U[0]])

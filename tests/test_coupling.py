@@ -9,15 +9,14 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import A_HERTZ, MU, STEEL, W, fretting_scene, make_scene
 
 import contactpipe as cp
 from contactpipe.simulation import grid_coordinates
 from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
 from contactpipe.solver.normal import solve_normal
-from contactpipe.solver.options import TUNING
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
-
-from helpers import A_HERTZ, MU, STEEL, W, fretting_scene, make_scene
+from contactpipe.solver.options import TUNING
 
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 TOL = 1e-9

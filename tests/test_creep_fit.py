@@ -8,8 +8,15 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe.materials import (PronyFit, fit_creep_compliance, fit_dynamic_moduli,
-                                   fit_relaxation_modulus, kelvin_voigt, prony, zener)
+from contactpipe.materials import (
+    PronyFit,
+    fit_creep_compliance,
+    fit_dynamic_moduli,
+    fit_relaxation_modulus,
+    kelvin_voigt,
+    prony,
+    zener,
+)
 from contactpipe.solver.memory import error_amplification
 
 T = np.concatenate([[0.0], np.logspace(-2, 2, 60)])         # 0 and 10 ms .. 100 s

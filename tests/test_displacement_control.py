@@ -7,12 +7,11 @@ The simulated contact is the paper's elastic one: steel on steel, R = 18 mm, W =
 """
 import numpy as np
 import pytest
+from helpers import A_HERTZ, MU, W, make_scene
 
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.testing import contact_law_violations
-
-from helpers import A_HERTZ, MU, W, make_scene
 
 C_SUM = an.tangential_compliance_sum(210e9, 0.3, 210e9, 0.3)
 D_GS = an.gross_slip_displacement(MU, W, A_HERTZ, C_SUM)

@@ -13,8 +13,13 @@ import xarray as xr
 from scipy.optimize import minimize
 
 import contactpipe as cp
-from contactpipe.post.fatigue import (CRITERIA, deviatoric_coordinates, longest_chord, min_ball,
-                                 plane_normals)
+from contactpipe.post.fatigue import (
+    CRITERIA,
+    deviatoric_coordinates,
+    longest_chord,
+    min_ball,
+    plane_normals,
+)
 
 COMPONENTS = ("s11", "s22", "s33", "s12", "s13", "s23")
 F_LIMIT, T_LIMIT = 450e6, 300e6          # fully reversed bending and torsion limits [Pa]

@@ -9,17 +9,16 @@ import pathlib
 
 import numpy as np
 import pytest
+from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, make_scene
 
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.exceptions import ArchiveError, SceneError
-from contactpipe.post.fretting import classify_loop, fretting_regime, loop_cycles, turning_points
 from contactpipe.pipeline.cli import main as cli_main
-from contactpipe.pipeline.sweep.parameters import delta_amplitude, delta_ratio
 from contactpipe.pipeline.figures.fretting import plot_energy_ratio, plot_fretting_map
 from contactpipe.pipeline.figures.regimes import fretting_map, write_regime_table
-
-from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, make_scene
+from contactpipe.pipeline.sweep.parameters import delta_amplitude, delta_ratio
+from contactpipe.post.fretting import classify_loop, fretting_regime, loop_cycles, turning_points
 
 C_SUM = an.tangential_compliance_sum(210e9, 0.3, 210e9, 0.3)
 D_GS = an.gross_slip_displacement(MU, W, A_HERTZ, C_SUM)
@@ -216,7 +215,7 @@ def test_regime_table_of_a_sweep(fretting_sweep, tmp_path):
 
 
 def test_plot_functions_draw_into_given_axes(fretting_sweep):
-    from matplotlib.figure import Figure          # matplotlib: only the figure tests need it
+    from matplotlib.figure import Figure  # matplotlib: only the figure tests need it
     fig = Figure()
     ax1, ax2 = fig.subplots(1, 2)
     assert plot_fretting_map(fretting_sweep, ax=ax1) is fig

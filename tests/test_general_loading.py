@@ -8,12 +8,11 @@ import re
 
 import numpy as np
 import pytest
+from helpers import A_HERTZ, E_STAR_STEEL, MU, STEEL, R, W, make_scene
 
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.testing import assert_contact_laws, contact_law_violations
-
-from helpers import A_HERTZ, E_STAR_STEEL, MU, R, STEEL, W, make_scene
 
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 SERIES = ("M1", "M2", "M3", "phi1", "phi2", "phi3")

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from contactpipe.scene import geometry as g
 from contactpipe.exceptions import SceneError
 from contactpipe.scene import Geometry, Grid
+from contactpipe.scene import geometry as g
 
 GRID = Grid(points=(16, 12), size=(2e-3, 1.5e-3))
 X1, X2 = GRID.coordinates()

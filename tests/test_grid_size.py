@@ -215,8 +215,8 @@ def test_a_surface_under_an_approach_is_checked_at_its_edge(tmp_path):
     under an approach omega its contact reaches a = sqrt(R omega), where the gap is
     omega / 2. With a = 1 mm the outermost cells (the nearest at 0.9396 mm) would be in
     contact: refused; with a = 0.7 mm it runs without reaching the edge."""
-    from contactpipe.scene.geometry import sphere_gap
     from contactpipe.scene import Grid
+    from contactpipe.scene.geometry import sphere_gap
 
     steel = {"material": "elastic", "young": 210e9, "poisson": 0.3}
     grid = Grid.make(points=(16, 16), size=(2e-3, 2e-3))

@@ -13,7 +13,12 @@ from scipy.integrate import IntegrationWarning, dblquad
 
 from contactpipe.exceptions import SceneError
 from contactpipe.solver.influence import (
-    COUPLING_KEYS, KEYS, body_kernels, cell_influence, offset_grid, pair_kernels,
+    COUPLING_KEYS,
+    KEYS,
+    body_kernels,
+    cell_influence,
+    offset_grid,
+    pair_kernels,
 )
 
 E = 70e9     # [Pa]

@@ -8,11 +8,14 @@ import pytest
 
 import contactpipe as cp
 from contactpipe.exceptions import ArchiveError, SceneError
+from contactpipe.pipeline.compare.reference import (
+    cell_average_field,
+    diagnose,
+    no_closed_form_message,
+)
 from contactpipe.pipeline.inputs import grid_of, radius_of_area, scene_digest, scene_of
 from contactpipe.pipeline.sweep.members import build_members, dim_names
 from contactpipe.pipeline.sweep.parameters import registered
-from contactpipe.pipeline.compare.reference import (cell_average_field, diagnose,
-                                            no_closed_form_message)
 from contactpipe.testing import tiny_scene
 
 

@@ -192,7 +192,7 @@ def test_old_path_as_an_attribute_of_the_package_warns_at_the_caller(forget_old_
     new = importlib.import_module("contactpipe.scene.geometry")
     _forget("contactpipe.geometry")
     with pytest.warns(DeprecationWarning, match="contactpipe.geometry has moved") as rec:
-        old = getattr(cp, "geometry")
+        old = cp.geometry                     # through the package's __getattr__
     assert len(rec) == 1 and rec[0].filename == __file__
     assert old is new
 

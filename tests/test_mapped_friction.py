@@ -8,11 +8,10 @@ import os
 import numpy as np
 import pytest
 import xarray as xr
+from helpers import fretting_scene
 
 import contactpipe as cp
 from contactpipe.testing import assert_contact_laws, contact_law_violations
-
-from helpers import fretting_scene
 
 SCENE = fretting_scene(n=32, steps=10, mu=0.1).replace({"solver.fft": "scipy"})
 X1, X2 = SCENE.grid.coordinates()

@@ -4,11 +4,10 @@ Discretisation is stated in each test; errors are relative.
 """
 import numpy as np
 import pytest
+from helpers import A_HERTZ, E_STAR_STEEL, P0_HERTZ, R, W, make_scene
 
 import contactpipe as cp
 from contactpipe import analytic as an
-
-from helpers import A_HERTZ, E_STAR_STEEL, P0_HERTZ, R, W, make_scene
 
 ONE_INSTANT = {"time": [0.0], "normal_force": W}
 

@@ -7,13 +7,12 @@ and FFT pairs are benchmark figures (benchmarks/vs_tamaas.py), not asserted here
 """
 import numpy as np
 import pytest
+from helpers import A_HERTZ, P0_HERTZ, R, W
 
-from contactpipe.scene.geometry import ellipsoid_gap, sphere_gap
 from contactpipe.materials import Body
+from contactpipe.scene.geometry import ellipsoid_gap, sphere_gap
 from contactpipe.solver.normal import NormalControl, prolong, restrict, solve_normal
 from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
-
-from helpers import A_HERTZ, P0_HERTZ, R, W
 
 STEEL = Body("elastic", 210e9, 0.3)
 

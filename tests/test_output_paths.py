@@ -12,8 +12,8 @@ import textwrap
 import pytest
 
 import contactpipe as cp
-from contactpipe.exceptions import OutputPathError
 from contactpipe._util.files import check_output_dir
+from contactpipe.exceptions import OutputPathError
 from contactpipe.pipeline import cli
 from contactpipe.pipeline.figures.plot import save_figure
 from contactpipe.pipeline.sweep import sweep

@@ -8,13 +8,13 @@ import pathlib
 import textwrap
 
 import numpy as np
-import xarray as xr
 import pytest
+import xarray as xr
 
 import contactpipe as cp
 from contactpipe.pipeline import cli
-from contactpipe.pipeline.sweep.config import read_pipeline_file
 from contactpipe.pipeline.cli.run import PipelineLockedError, run_pipeline
+from contactpipe.pipeline.sweep.config import read_pipeline_file
 from contactpipe.post.stress import open_stress
 from contactpipe.testing import TINY_SCENES
 
@@ -348,8 +348,8 @@ def test_the_example_pipeline_has_a_member_with_a_closed_form():
     steps, compares within the discretisation's error (measured: contact radius 4.7 %,
     approach 0.12 %; the example's 64 x 64 cells, 100 steps: 1.4 %, 0.018 %)."""
     from contactpipe.pipeline.compare import compare
-    from contactpipe.pipeline.sweep.members import build_members
     from contactpipe.pipeline.compare.reference import closed_form_for
+    from contactpipe.pipeline.sweep.members import build_members
     spec = read_pipeline_file(EXAMPLES / "pipeline.toml")
     assert spec.reference == "closed_form" and "sweep" in spec.figures
     _, _, _, members = build_members(spec.base, spec.axes, spec.mode)

@@ -5,11 +5,10 @@ Dundurs β of a pair vanishes (no normal-tangential coupling) for identical bodi
 incompressible (or rigid) bodies, and for a rigid body on an incompressible one.
 """
 import pytest
+from helpers import MU, STEEL, W, fretting_scene, make_scene
 
 import contactpipe as cp
 from contactpipe.planning import RULES, Rule, models, pair_couples
-
-from helpers import MU, STEEL, W, fretting_scene, make_scene
 
 RIGID = {"material": "rigid"}
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}

@@ -5,16 +5,15 @@ import io
 import numpy as np
 import pytest
 import xarray as xr
+from helpers import fretting_scene
 from matplotlib.image import imread
 
 import contactpipe as cp
+from contactpipe.exceptions import ArchiveError
+from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.pipeline.figures import plot, sweeps
 from contactpipe.pipeline.inputs import centre_rows
-from contactpipe.pipeline.cli import main as cli_main
-from contactpipe.exceptions import ArchiveError
 from contactpipe.post.stress import save_stress
-
-from helpers import fretting_scene
 
 SHAPE = (500, 800, 4)      # 8 x 5 in at 100 dpi, RGBA
 

@@ -15,8 +15,17 @@ import pytest
 
 import contactpipe as cp
 from contactpipe import materials
-from contactpipe.materials import (Body, ExponentialCreep, bulk_ratio, elastic_bulk_parts,
-                                   kelvin_voigt, maxwell, prony, relaxation_from_creep, zener)
+from contactpipe.materials import (
+    Body,
+    ExponentialCreep,
+    bulk_ratio,
+    elastic_bulk_parts,
+    kelvin_voigt,
+    maxwell,
+    prony,
+    relaxation_from_creep,
+    zener,
+)
 from contactpipe.planning import plan
 from contactpipe.solver.influence import body_kernel_parts, body_kernels
 from contactpipe.solver.memory import BodyMemory, RecursiveMemory

@@ -18,9 +18,13 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
+from contactpipe.planning.accuracy import (
+    choose_preload,
+    preload_error,
+    preload_fractions,
+    resolve_accuracy,
+)
 from contactpipe.simulation import preload as simulation
-from contactpipe.planning.accuracy import (choose_preload, preload_error, preload_fractions,
-                                          resolve_accuracy)
 
 R, W, E, NU, MU = 0.018, 1000.0, 105e9, 0.3, 0.1
 

@@ -8,6 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers import W, make_scene, md_circles, radial_force
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
@@ -15,8 +16,6 @@ import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.planning import pair_couples
 from contactpipe.testing import assert_contact_laws
-
-from helpers import W, make_scene, md_circles, radial_force
 
 # --------------------------------------------------------------------------- contact laws
 STEEL = {"material": "elastic", "young": 210e9, "poisson": 0.3}

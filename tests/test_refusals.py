@@ -158,9 +158,9 @@ def test_no_nan_is_written_or_returned(work, tmp_path):
     """save_stress refuses a stress holding NaN (nothing at the target); fatigue refuses
     limits that overflow its indices (1e-300 and 1e308 Pa gave NaN Crossland fields);
     the pipeline file refuses such limits before any work."""
-    from contactpipe.post.stress import save_stress
-    from contactpipe.pipeline.sweep.config import StressSpec
     from contactpipe.pipeline.cli.stress import write_stress_product
+    from contactpipe.pipeline.sweep.config import StressSpec
+    from contactpipe.post.stress import save_stress
     with pytest.raises(ValueError, match=r"x3 = 1e\+300 m is too deep: depths must be from 0 "
                                          r"to 2 m"):    # the [stress] product: at once
         write_stress_product(work / "run.nc", tmp_path / "product.nc",

@@ -8,8 +8,13 @@ import pytest
 import contactpipe as cp
 import contactpipe.simulation.march as simulation
 from contactpipe.pipeline.cli import main as cli_main
-from contactpipe.planning.resources import (DEFAULT_MAX_HOURS, PAIR_COST_S, TYPICAL_PAIRS,
-                                  check_resources, estimate_resources)
+from contactpipe.planning.resources import (
+    DEFAULT_MAX_HOURS,
+    PAIR_COST_S,
+    TYPICAL_PAIRS,
+    check_resources,
+    estimate_resources,
+)
 from contactpipe.testing import TINY_SCENES, tiny_scene
 
 PLENTY = 2 ** 50          # bytes: the memory check out of the way

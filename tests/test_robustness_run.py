@@ -13,21 +13,20 @@ import sys
 import time
 import warnings
 
+import helpers
 import numpy as np
 import pytest
 
 import contactpipe as cp
 import contactpipe.simulation.march as simulation
-from contactpipe.planning.accuracy import resolve_accuracy
+from contactpipe._util.files import exclusive_lock
 from contactpipe.archive import ArchiveWriter, resume_lock
 from contactpipe.exceptions import ArchiveError, OutputPathError, SceneError
-from contactpipe._util.files import exclusive_lock
 from contactpipe.nomenclature import variables_for
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.planning import check_resources, estimate_resources
+from contactpipe.planning.accuracy import resolve_accuracy
 from contactpipe.testing import TINY_SCENES, assert_contact_laws
-
-import helpers
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TINY = cp.Scene.from_toml_text(TINY_SCENES["creep"])

@@ -12,10 +12,20 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from contactpipe import materials
-from contactpipe.exceptions import SceneError
 from contactpipe._util.files import loads_toml
-from contactpipe.scene import (BodySpec, Fretting, Friction, Geometry, Grid, Load, Output,
-                               Scene, Solver, TimeMesh)
+from contactpipe.exceptions import SceneError
+from contactpipe.scene import (
+    BodySpec,
+    Fretting,
+    Friction,
+    Geometry,
+    Grid,
+    Load,
+    Output,
+    Scene,
+    Solver,
+    TimeMesh,
+)
 from contactpipe.scene.parts import knot_steps
 from contactpipe.testing import TINY_SCENES
 

@@ -6,14 +6,13 @@ import sys
 import numpy as np
 import pytest
 import xarray as xr
+from helpers import W, fretting_scene
 
 import contactpipe as cp
 from contactpipe.materials import maxwell
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.simulation import State
 from contactpipe.solver.memory import make_memory
-
-from helpers import W, fretting_scene
 
 FIELDS = {"p": "Pa", "u3": "m", "h": "m"}
 SERIES = {"W": "N", "omega3": "m", "contact_area": "m2", "iterations": "1"}

@@ -21,13 +21,19 @@ from scipy import integrate
 
 import contactpipe as cp
 import contactpipe.post.stress as stress_module
-from contactpipe.analytic.hamilton import (hamilton_stress, hertz_axis_stress,
-                                           trailing_edge_tension)
+from contactpipe.analytic.hamilton import hamilton_stress, hertz_axis_stress, trailing_edge_tension
 from contactpipe.pipeline import cli
-from contactpipe.solver.subsurface import (COMPONENTS, TRACTIONS, SubsurfaceOperator,
-                                           cache_info, cell_stress, depth_kernels,
-                                           point_force_stress, von_mises)
 from contactpipe.post.stress import open_stress, save_stress, subsurface_stress
+from contactpipe.solver.subsurface import (
+    COMPONENTS,
+    TRACTIONS,
+    SubsurfaceOperator,
+    cache_info,
+    cell_stress,
+    depth_kernels,
+    point_force_stress,
+    von_mises,
+)
 from contactpipe.testing import tiny_scene
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -598,8 +604,12 @@ def test_cli_writes_the_api_result(tiny, tmp_path):
 
 def test_plot_functions_return_the_figure(sliding):
     from matplotlib.figure import Figure
-    from contactpipe.pipeline.figures.stress import (plot_stress, plot_stress_section,
-                                                  plot_stress_surface)
+
+    from contactpipe.pipeline.figures.stress import (
+        plot_stress,
+        plot_stress_section,
+        plot_stress_surface,
+    )
     st = subsurface_stress(sliding, [0.0, 0.25 * A, 0.5 * A])
     fig = Figure()
     ax = fig.subplots()

@@ -14,13 +14,18 @@ import time
 import numpy as np
 import pytest
 
-from contactpipe.pipeline import cli
 from contactpipe.archive import open_archive
 from contactpipe.exceptions import ArchiveError, SceneError
-from contactpipe.scene import Scene
+from contactpipe.pipeline import cli
+from contactpipe.pipeline.sweep import (
+    SweepLockedError,
+    open_sweep,
+    register_parameter,
+    sweep,
+    with_window,
+)
 from contactpipe.pipeline.sweep.config import load_sweep_file, read_sweep_file
-from contactpipe.pipeline.sweep import (SweepLockedError, open_sweep,
-                               register_parameter, sweep, with_window)
+from contactpipe.scene import Scene
 from contactpipe.testing import TINY_SCENES
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -520,6 +525,7 @@ def test_members_sent_back_are_simulated_in_the_worker_scratch_and_swept(tmp_pat
     assert len(left) == 1 and left[0].name.startswith(f"contactpipe-member-{proc.pid}-")
     assert [p.name for p in left[0].iterdir()][0].startswith(".member.nc.")
     import distributed
+
     from contactpipe.pipeline.sweep import execute
     monkeypatch.setattr(distributed, "get_worker",
                         lambda: type("W", (), {"local_directory": str(local)})())

@@ -13,9 +13,9 @@ import pytest
 from contactpipe.archive import open_archive
 from contactpipe.exceptions import ArchiveError
 from contactpipe.pipeline import cli
+from contactpipe.pipeline.sweep import archive_state, open_sweep, sweep
 from contactpipe.pipeline.sweep.execute import land_member, run_member, workers_share_disk
 from contactpipe.pipeline.sweep.manifest import check_manifest, read_manifest
-from contactpipe.pipeline.sweep import archive_state, open_sweep, sweep
 from contactpipe.scene import Scene
 from contactpipe.testing import TINY_SCENES
 

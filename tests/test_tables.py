@@ -14,12 +14,12 @@ import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from contactpipe.scene import parts as scene_parts
-from contactpipe.exceptions import SceneError
 from contactpipe._util.files import loads_toml
+from contactpipe.exceptions import SceneError
 from contactpipe.pipeline.sweep import config
-from contactpipe.scene.model import FIELDS as SCENE_FIELDS
 from contactpipe.scene import Scene
+from contactpipe.scene import parts as scene_parts
+from contactpipe.scene.model import FIELDS as SCENE_FIELDS
 from contactpipe.scene.tables import Field, Reader, nesting_depth, show
 from contactpipe.testing import TINY_SCENES
 

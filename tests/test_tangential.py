@@ -5,13 +5,12 @@ Every archive made here also passes :func:`contactpipe.testing.assert_contact_la
 """
 import numpy as np
 import pytest
+from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, fretting_scene, make_scene
 
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.pipeline.compare import compare
 from contactpipe.testing import assert_contact_laws
-
-from helpers import A_HERTZ, E_STAR_STEEL, MU, R, W, fretting_scene, make_scene
 
 ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
 COMPLIANCE = an.tangential_compliance_sum(210e9, 0.3, 210e9, 0.3)

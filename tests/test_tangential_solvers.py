@@ -16,16 +16,20 @@ Checks, each against something the solvers do not compute themselves:
 """
 import numpy as np
 import pytest
+from helpers import box_qp_exact, spd_matrix
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 
 from contactpipe.solver.cg import Constraints
 from contactpipe.solver.influence import cell_influence
-from contactpipe.solver.tangential import (disk_project, force_rows, project_disks_sum,
-                                           solve_scalar, solve_vector)
-
-from helpers import box_qp_exact, spd_matrix
+from contactpipe.solver.tangential import (
+    disk_project,
+    force_rows,
+    project_disks_sum,
+    solve_scalar,
+    solve_vector,
+)
 
 
 class DenseOperator:

@@ -21,12 +21,25 @@ from scipy import integrate
 
 import contactpipe as cp
 from contactpipe import analytic as an
+from contactpipe.materials import (
+    ExponentialCreep,
+    TabulatedCreep,
+    kelvin_voigt,
+    maxwell,
+    prony,
+    step_start_stable_step,
+    zener,
+)
 from contactpipe.planning.accuracy import resolve_accuracy
-from contactpipe.materials import (ExponentialCreep, TabulatedCreep, kelvin_voigt, maxwell,
-                                   prony, step_start_stable_step, zener)
-from contactpipe.solver.memory import (DirectMemory, RecursiveMemory, error_amplification,
-                                       fitted_bdf2_coefficients, is_monotone, make_memory,
-                                       resolve_rule)
+from contactpipe.solver.memory import (
+    DirectMemory,
+    RecursiveMemory,
+    error_amplification,
+    fitted_bdf2_coefficients,
+    is_monotone,
+    make_memory,
+    resolve_rule,
+)
 from contactpipe.testing import creep_laws, lee_radok_measures, zigzag
 
 R, W, E, NU = 0.018, 1000.0, 105e9, 0.3

@@ -7,13 +7,12 @@ full-slip torque over the stuck stiffness.
 """
 import numpy as np
 import pytest
+from helpers import A_HERTZ, MU, P0_HERTZ, W, make_scene
 from scipy import integrate
 
 import contactpipe as cp
 from contactpipe import analytic as an
 from contactpipe.testing import contact_law_violations
-
-from helpers import A_HERTZ, MU, P0_HERTZ, W, make_scene
 
 C_T = an.torsional_compliance(210e9, 0.3, 210e9, 0.3)
 K_STUCK = an.torsional_stiffness(A_HERTZ, C_T)

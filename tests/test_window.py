@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import contactpipe as cp
-from contactpipe.simulation import march as simulation
 from contactpipe.planning import plan as make_plan
+from contactpipe.simulation import march as simulation
 from contactpipe.simulation.march import State
 from contactpipe.simulation.problem import Problem
 from contactpipe.solver import window

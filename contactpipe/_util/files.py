@@ -216,7 +216,7 @@ def exclusive_lock(path, what: str, error=LockedError):
         Raised when another process (or another lock object) holds it, with a message
         naming the lock file and its holder.
     """
-    import filelock                      # only where a lock is taken: not to validate
+    import filelock  # only where a lock is taken: not to validate
     path = pathlib.Path(path)
     lock = filelock.FileLock(str(path), blocking=False)
     try:

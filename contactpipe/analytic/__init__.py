@@ -60,18 +60,48 @@ References
 from __future__ import annotations
 
 from ._common import cell_average, composite_modulus, tangential_compliance_sum
-from .hertz import (FlatPunch, HertzEllipsoid, HertzSphere, TiltedHertz, flat_punch,
-                    hertz_ellipsoid, hertz_sphere, hertz_tilted)
-from .mindlin import (CattaneoMindlin, cattaneo_mindlin, displacement_energy_per_cycle,
-                      ENERGY_RATIO_TRANSITION, displacement_loop_force, energy_per_cycle,
-                      energy_ratio, gross_slip_boundary, gross_slip_displacement,
-                      masing_memory, mindlin_deresiewicz_traction, mindlin_force,
-                      stick_radius, tangential_displacement)
-from .torsion import (full_slip_torque, lubkin_moment, lubkin_torsion, torsion_loop_moment,
-                      torsional_compliance, torsional_stiffness)
+from .hertz import (
+                    FlatPunch,
+                    HertzEllipsoid,
+                    HertzSphere,
+                    TiltedHertz,
+                    flat_punch,
+                    hertz_ellipsoid,
+                    hertz_sphere,
+                    hertz_tilted,
+)
+from .lee_radok import (
+                    LeeRadokContact,
+                    lee_radok_pressure,
+                    lee_radok_radius,
+                    lee_radok_sphere,
+                    relaxation_function,
+)
+from .mindlin import (
+                    ENERGY_RATIO_TRANSITION,
+                    CattaneoMindlin,
+                    cattaneo_mindlin,
+                    displacement_energy_per_cycle,
+                    displacement_loop_force,
+                    energy_per_cycle,
+                    energy_ratio,
+                    gross_slip_boundary,
+                    gross_slip_displacement,
+                    masing_memory,
+                    mindlin_deresiewicz_traction,
+                    mindlin_force,
+                    stick_radius,
+                    tangential_displacement,
+)
 from .spence import spence_stick_ratio
-from .lee_radok import (LeeRadokContact, lee_radok_pressure, lee_radok_radius,
-                        lee_radok_sphere, relaxation_function)
+from .torsion import (
+                    full_slip_torque,
+                    lubkin_moment,
+                    lubkin_torsion,
+                    torsion_loop_moment,
+                    torsional_compliance,
+                    torsional_stiffness,
+)
 
 __all__ = [
     "composite_modulus", "tangential_compliance_sum",

@@ -25,8 +25,8 @@ import zipfile
 
 import numpy as np
 
-from ..exceptions import ArchiveError, OutputPathError, one_line
 from .._util.files import atomic_path, temporaries
+from ..exceptions import ArchiveError, OutputPathError, one_line
 from .schema import resumable_part
 
 __all__ = ["Checkpoint", "resume_lock"]

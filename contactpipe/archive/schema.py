@@ -7,19 +7,25 @@ of a Dataset's dimensions, coordinates, variables and global attributes against
 """
 from __future__ import annotations
 
+import json
 import math
 import numbers
-import json
 import pathlib
 
 import numpy as np
 import xarray as xr
 
+from .._util.files import TOMLDecodeError, loads_toml
 from .._version import __version__
 from ..exceptions import ArchiveError, one_line
-from .._util.files import TOMLDecodeError, loads_toml
 from ..nomenclature import (
-    CONVENTIONS, COORDINATES, FIELD, MAPS, REQUIRED_ATTRS, TANGENTIAL, VARIABLES,
+    CONVENTIONS,
+    COORDINATES,
+    FIELD,
+    MAPS,
+    REQUIRED_ATTRS,
+    TANGENTIAL,
+    VARIABLES,
 )
 
 __all__ = ["PRECISIONS", "SERIES_CHUNK", "COMPLEVEL", "DIMS", "join_problems", "storable",

@@ -30,14 +30,23 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
-from ..exceptions import ArchiveError, one_line
 from .._util.files import publish, temp_name
 from .._util.interrupts import raise_if_signalled
+from ..exceptions import ArchiveError, one_line
 from ..nomenclature import FIELD, MAP, MAPS, VARIABLES, cf_attrs
 from .content import content_problems
 from .schema import (
-    COMPLEVEL, SERIES_CHUNK, attr_problems, axis, global_attrs, join_problems,
-    precision_dtype, resumable_part, schema_problems, storable, storage_dtype,
+    COMPLEVEL,
+    SERIES_CHUNK,
+    attr_problems,
+    axis,
+    global_attrs,
+    join_problems,
+    precision_dtype,
+    resumable_part,
+    schema_problems,
+    storable,
+    storage_dtype,
     variable_problems,
 )
 

@@ -35,12 +35,32 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .creep import (ELASTIC, ExponentialCreep, TabulatedCreep, bulk_ratio, combine,
-                    elastic_bulk_parts, kelvin_voigt, maxwell, prony, relaxation_from_creep,
-                    step_start_stable_step, zener)
-from .fitting import (FIT_TOLERANCE, TABLE_KINDS, PronyFit, compliance_error,
-                      fit_creep_compliance, fit_dynamic_moduli, fit_relaxation_modulus,
-                      fit_table_file, read_table_file, table_time_span)
+from .creep import (
+    ELASTIC,
+    ExponentialCreep,
+    TabulatedCreep,
+    bulk_ratio,
+    combine,
+    elastic_bulk_parts,
+    kelvin_voigt,
+    maxwell,
+    prony,
+    relaxation_from_creep,
+    step_start_stable_step,
+    zener,
+)
+from .fitting import (
+    FIT_TOLERANCE,
+    TABLE_KINDS,
+    PronyFit,
+    compliance_error,
+    fit_creep_compliance,
+    fit_dynamic_moduli,
+    fit_relaxation_modulus,
+    fit_table_file,
+    read_table_file,
+    table_time_span,
+)
 
 __all__ = [
     "ExponentialCreep", "TabulatedCreep", "ELASTIC", "maxwell", "kelvin_voigt", "zener",

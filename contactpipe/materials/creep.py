@@ -221,7 +221,7 @@ def step_start_stable_step(creep) -> float:
         A creep function with a decreasing term (b < 0 or some c_i < 0): the bound
         above does not hold for it.
     """
-    from scipy.optimize import brentq      # scipy.optimize is heavy; only needed here
+    from scipy.optimize import brentq  # scipy.optimize is heavy; only needed here
 
     phi0 = float(creep.phi0)
     if isinstance(creep, TabulatedCreep):
@@ -323,7 +323,7 @@ def relaxation_from_creep(creep: ExponentialCreep, extra: float = 0.0) -> Expone
     ValueError
         A decreasing term, or phi0 + extra < 0, or phi = 0.
     """
-    from scipy.optimize import brentq           # heavy; only nu(t) bodies need it
+    from scipy.optimize import brentq  # heavy; only nu(t) bodies need it
 
     c = -np.asarray(creep.d, dtype=float)
     tau = np.asarray(creep.tau, dtype=float)

@@ -124,7 +124,7 @@ def _log_times(lo, hi, per_decade, times=None):
 def _nonnegative_fit(matrix, data):
     """min |(A c - y)/y| over c >= 0 (scipy.optimize.least_squares with bounds); a zero
     datum (a compliance at t = 0) weighs as the smallest positive one."""
-    from scipy.optimize import least_squares   # heavy; only the fits need it
+    from scipy.optimize import least_squares  # heavy; only the fits need it
 
     weight = 1.0 / np.where(data > 0, data, np.min(data[data > 0]))
     a = matrix * weight[:, None]
@@ -148,7 +148,7 @@ def _fit_terms(basis, data, times, free, span):
     Jacobian): the misfit never rises above the grid's, and a spectrum with few terms
     off the grid is found exactly. ``basis(times)`` returns the columns and their
     derivatives by log time."""
-    from scipy.optimize import least_squares   # heavy; only the fits need it
+    from scipy.optimize import least_squares  # heavy; only the fits need it
 
     a, _ = basis(times)
     c = _nonnegative_fit(a, data)
@@ -386,7 +386,7 @@ def _creep_from_relaxation(e_inf, ek, tau):
     poles s_j = -1/lam_j (one between consecutive -1/tau_i, one in (-1/tau_max, 0) when
     e_inf > 0, else s = 0: a dashpot) give D = 1/E0 + sum D_j (1 - exp(-t/lam_j)) + t/eta,
     D_j = lam_j / M'(s_j) > 0, 1/eta = 1 / sum ek tau."""
-    from scipy.optimize import brentq           # heavy; only the fits need it
+    from scipy.optimize import brentq  # heavy; only the fits need it
 
     e0 = e_inf + ek.sum()
     if e0 <= 0:

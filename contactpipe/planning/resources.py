@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 try:
-    import resource                      # Unix only
+    import resource  # Unix only
 except ImportError:  # pragma: no cover - Windows: no RLIMIT_AS to respect
     resource = None
 
@@ -243,7 +243,7 @@ def _step_share(scene, n1, n2) -> float:
     if axes is None or size is None:
         return 1.0
     share = 1.0
-    for a, length, n in zip(axes, size, (n1, n2)):
+    for a, length, n in zip(axes, size, (n1, n2), strict=True):
         cells = 2.0 * float(a) / float(length) * n             # the contact's extent
         c = SIDE_STEP * math.ceil((cells + 2 * max(2.0, MARGIN * cells)) / SIDE_STEP)
         share *= min(n, c) / n
@@ -323,8 +323,8 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     54.5 MiB with them, estimated 53.3 then 65.1 MiB). The estimate
     stays above every measurement, by 6 % to 80 % (the most on small grids, where the fixed
     allowances dominate); it grows as N1 x N2 (for a viscoelastic half-space 1.7 kB per cell
-    measured at 512², 1.9 kB estimated: four sets of nine kernel spectra). The time is a floor, not a forecast:
-    the FFT pairs of the speed table times the least time of one pair.
+    measured at 512², 1.9 kB estimated: four sets of nine kernel spectra). The time is a
+    floor, not a forecast: the FFT pairs of the speed table times the least time of one pair.
     """
     pl = plan_ if plan_ is not None else plan(scene)
     n1, n2 = (int(v) for v in scene.grid.points)

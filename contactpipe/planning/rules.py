@@ -63,9 +63,9 @@ FFT pairs, ``contactpipe bench fretting``); ``"vector"`` asks for the full form 
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from functools import cached_property
-from typing import Callable
 
 import numpy as np
 
@@ -394,7 +394,7 @@ def plan(scene, tangential=None, coupling=None) -> Plan:
         Override of the coupling loop. Dropping it on a coupled pair is refused.
     """
     facts = _Facts(scene)
-    facts.couples                             # a modulus that overflows: refused first
+    _ = facts.couples                         # a modulus that overflows: refused first
     choice = tangential or scene.solver.tangential
     if choice not in models("tangential") + ("auto",):
         raise SceneError(f"tangential={choice!r}: allowed 'auto', 'scalar', 'vector', 'none'")

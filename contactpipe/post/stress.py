@@ -52,12 +52,12 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
+from .._util.files import atomic_path, loads_toml, make_folder
 from .._version import __version__
 from ..archive import open_archive
 from ..archive.content import content_problems
 from ..archive.schema import join_problems
 from ..exceptions import ArchiveError
-from .._util.files import atomic_path, loads_toml, make_folder
 from ..solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
 
 __all__ = ["subsurface_stress", "save_stress", "open_stress", "verify_stress",
@@ -268,7 +268,7 @@ def _chunk_sizes(nt, nz, n1, n2, chunks, cache_bytes):
 
 
 def _lazy(fields, names, depths, op, sign_q, tc, zc):
-    import dask.array as da                    # heavy: only for lazy results
+    import dask.array as da  # heavy: only for lazy results
     arrays = []
     for name in names:
         a = fields[name].data

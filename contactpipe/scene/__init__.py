@@ -7,9 +7,24 @@ programs), :mod:`.geometry` (gaps and surfaces), :mod:`.friction_map` and
 :mod:`.gridded` (gridded netCDF inputs), :mod:`.fit` (Prony fits of measured tables).
 """
 from ..exceptions import SceneError
-from .model import (AUTO_MARGIN, AUTO_PUNCH_FACTOR, BodySpec, Fretting, Friction, Geometry,
-                    Grid, Load, Output, Scene, Solver, TimeMesh, auto_grid_size,
-                    contact_reach, contact_shifts, hertz_semi_axes)
+from .model import (
+                    AUTO_MARGIN,
+                    AUTO_PUNCH_FACTOR,
+                    BodySpec,
+                    Fretting,
+                    Friction,
+                    Geometry,
+                    Grid,
+                    Load,
+                    Output,
+                    Scene,
+                    Solver,
+                    TimeMesh,
+                    auto_grid_size,
+                    contact_reach,
+                    contact_shifts,
+                    hertz_semi_axes,
+)
 
 __all__ = ["Scene", "Geometry", "BodySpec", "Friction", "Load", "Fretting", "Grid",
            "TimeMesh", "Solver", "Output", "SceneError", "hertz_semi_axes", "contact_reach",

@@ -8,13 +8,19 @@ import math
 
 import numpy as np
 
-from . import friction_map, geometry as _geometry
 from .. import materials
-from .parts import (MAX_STEPS, Grid, TimeMesh)
+from . import friction_map
+from . import geometry as _geometry
+from .parts import MAX_STEPS, Grid, TimeMesh
+from .reach import (
+    _TILTS,
+    _knot_values,
+    auto_grid_size,
+    contact_reach,
+    contact_shifts,
+    hertz_semi_axes,
+)
 from .tables import show
-
-from .reach import (_TILTS, _knot_values, auto_grid_size, contact_reach, contact_shifts,
-                    hertz_semi_axes)
 
 __all__ = ["check_scene"]
 
@@ -213,12 +219,12 @@ def _check_reach(p, problems):
         auto_grid_size(geo, p["indenter"], p["halfspace"], load)
     if any(math.isnan(r) for r in reach) or not all(math.isfinite(L) for L in size):
         return                  # an estimate out of range: refused by _check_grid for "auto"
-    allowed = [L / 2 - L / n for L, n in zip(size, grid.points)]
+    allowed = [L / 2 - L / n for L, n in zip(size, grid.points, strict=True)]
     over = [ax for ax in (0, 1) if reach[ax] > allowed[ax]]
     if not over:
         return
-    need = [r / (0.5 - 1.0 / n) for r, n in zip(reach, grid.points)]
-    need = [max(n, L) for n, L in zip(need, size)]
+    need = [r / (0.5 - 1.0 / n) for r, n in zip(reach, grid.points, strict=True)]
+    need = [max(n, L) for n, L in zip(need, size, strict=True)]
     ax = over[0]
     name = ("x1", "x2")[ax]
     shifts = contact_shifts(geo, load)

@@ -8,8 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .loading import (MAX_STEPS, ROWS, Programs, knot_steps, per_knot, program_field,
-                      read_program)
+from .loading import MAX_STEPS, ROWS, Programs, knot_steps, per_knot, program_field, read_program
 from .tables import Field, Part, Reader, is_sequence, show
 
 __all__ = ["Load", "Fretting", "PRELOADS", "MAX_CYCLES"]

@@ -39,14 +39,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import SceneError
 from .._util.files import loads_toml
-from .parts import (MATERIALS, SHAPES, BodySpec, Fretting, Friction,
-                          Geometry, Grid, Load, Output, Solver, TimeMesh)
-from .tables import Field, Reader, show
-from .reach import (AUTO_MARGIN, AUTO_PUNCH_FACTOR, auto_grid_size, contact_reach,
-                    contact_shifts, hertz_semi_axes)
+from ..exceptions import SceneError
 from .checks import check_scene
+from .parts import (
+    MATERIALS,
+    SHAPES,
+    BodySpec,
+    Fretting,
+    Friction,
+    Geometry,
+    Grid,
+    Load,
+    Output,
+    Solver,
+    TimeMesh,
+)
+from .reach import (
+    AUTO_MARGIN,
+    AUTO_PUNCH_FACTOR,
+    auto_grid_size,
+    contact_reach,
+    contact_shifts,
+    hertz_semi_axes,
+)
+from .tables import Field, Reader, show
 
 __all__ = ["Scene", "Geometry", "BodySpec", "Friction", "Load", "Fretting", "Grid",
            "TimeMesh", "Solver", "Output", "SceneError", "hertz_semi_axes", "contact_reach",
@@ -129,7 +146,7 @@ class Scene:
     # -- construction ------------------------------------------------------------------
 
     @classmethod
-    def from_dict(cls, d, base_dir=None) -> "Scene":
+    def from_dict(cls, d, base_dir=None) -> Scene:
         """A scene from its nested-dict form (as :meth:`to_dict` gives or TOML reads); a
         relative ``geometry.file`` or ``friction.mu`` file is taken relative to
         ``base_dir`` (default: the current directory)."""
@@ -152,13 +169,13 @@ class Scene:
         return cls(**d)
 
     @classmethod
-    def from_toml_text(cls, text: str, base_dir=None) -> "Scene":
+    def from_toml_text(cls, text: str, base_dir=None) -> Scene:
         """A scene from TOML text; a relative ``geometry.file`` is taken relative to
         ``base_dir`` (default: the current directory)."""
         return cls.from_dict(loads_toml(text, "the scene"), base_dir)
 
     @classmethod
-    def from_toml(cls, path) -> "Scene":
+    def from_toml(cls, path) -> Scene:
         """A scene from a TOML file; a relative ``geometry.file`` is taken relative to
         the scene file's folder."""
         path = os.fspath(path)
@@ -184,7 +201,7 @@ class Scene:
     def to_toml(self) -> str:
         """The scene as TOML text; reading it back gives an equal scene."""
         d = self.to_dict()
-        import tomli_w                   # only to write: validation reads with tomllib
+        import tomli_w  # only to write: validation reads with tomllib
         text = tomli_w.dumps(d)
         compact = _compact_arrays(text)
         return compact if loads_toml(compact) == loads_toml(text) else text
@@ -218,7 +235,7 @@ class Scene:
             files.append(self.friction.mu)
         return [f for f in files if f]
 
-    def replace(self, changes) -> "Scene":
+    def replace(self, changes) -> Scene:
         """A new, validated scene with some values changed.
 
         Parameters

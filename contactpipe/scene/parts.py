@@ -20,14 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import geometry as _geometry
-from . import friction_map
 from .. import materials
 from ..exceptions import SceneError
-from .loading import (MAX_STEPS, knot_steps)
+from . import friction_map
+from . import geometry as _geometry
 from .fit import fit_options, fitted_young
-from .tables import Field, Part, Reader, show
 from .load import MAX_CYCLES, PRELOADS, Fretting, Load  # noqa: F401 - the old module had them
+from .loading import MAX_STEPS, knot_steps
+from .tables import Field, Part, Reader, show
 
 __all__ = ["Part", "Geometry", "BodySpec", "Friction", "Fretting", "Load", "Grid",
            "TimeMesh", "Solver", "Output", "knot_steps", "SHAPES", "MATERIALS",

@@ -7,7 +7,6 @@ import math
 
 import numpy as np
 
-
 __all__ = ["hertz_semi_axes", "contact_reach", "contact_shifts", "auto_grid_size",
            "AUTO_MARGIN", "AUTO_PUNCH_FACTOR"]
 
@@ -161,7 +160,7 @@ def contact_reach(geometry, indenter, halfspace, load):
         return None
     a = hertz_semi_axes(geometry, indenter, halfspace, load)
     shifts = contact_shifts(geometry, load)
-    return tuple(float(ai + s[0]) for ai, s in zip(a, shifts))
+    return tuple(float(ai + s[0]) for ai, s in zip(a, shifts, strict=True))
 
 
 def auto_grid_size(geometry, indenter, halfspace, load):

@@ -30,18 +30,26 @@ import warnings
 
 import numpy as np
 
-from ..archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
-from ..exceptions import (ArchiveError, ConvergenceError, GridError, GrossSlidingError,
-                         OutputPathError, ResumeNotice, one_line)
 from .._util.files import LockedError, check_output_path, exclusive_lock, make_folder
 from .._util.interrupts import Interrupted, deferred, raise_if_signalled, signals_as_interrupt
+from ..archive import ArchiveWriter, Checkpoint, MemoryWriter, open_archive, resume_lock
+from ..exceptions import (
+    ArchiveError,
+    ConvergenceError,
+    GridError,
+    GrossSlidingError,
+    OutputPathError,
+    ResumeNotice,
+    one_line,
+)
 from ..nomenclature import variables_for
-from ..planning import check_resources, estimate_resources, plan as make_plan
+from ..planning import check_resources, estimate_resources
+from ..planning import plan as make_plan
 from ..planning.accuracy import resolve_accuracy
 from ..solver.coupling import FREEDOMS, Previous, solve_instant
+from ..solver.state import State
 from ..solver.warm_start import continued_start, self_similar_start
 from ..solver.window import solve_in_window
-from ..solver.state import State
 from . import preload
 from .preload import Path
 from .problem import Problem, grid_coordinates
@@ -204,7 +212,7 @@ def _failure(pb, k, T, res) -> ConvergenceError:
         hint += ("; the computation overflowed float64 (the forces, moduli or lengths of "
                  "the scene are beyond its range)")
     if res.failed == "normal" and pb.program.general:
-        keys = [key for i, key in zip((3, 4), pb.program.keys[3:5])
+        keys = [key for i, key in zip((3, 4), pb.program.keys[3:5], strict=True)
                 if key.startswith("moment")]
         if keys:
             hint += (f"; a force-controlled {' and '.join('load.' + k_ for k_ in keys)} may "
@@ -382,7 +390,7 @@ def _checkpoint_on_interrupt(pb, writer, ckpt, st, whole, saved, err):
 
 
 def _progress(scene, total, initial):
-    from tqdm.auto import tqdm          # only with progress=True: tqdm is optional here
+    from tqdm.auto import tqdm  # only with progress=True: tqdm is optional here
     return tqdm(total=total, initial=initial, desc=scene.name, unit="step")
 
 

@@ -22,8 +22,13 @@ from ..materials import FIT_TOLERANCE, dundurs_beta
 from ..planning.accuracy import knot_multiple, preload_fractions
 from ..solver.coupling import Controls, Tolerances
 from ..solver.memory import BodyMemory, make_memory, resolve_body_rule
-from ..solver.operator import (ContactOperator, body_spectra_parts, convolver,
-                              history_displacement, history_kernels)
+from ..solver.operator import (
+    ContactOperator,
+    body_spectra_parts,
+    convolver,
+    history_displacement,
+    history_kernels,
+)
 
 __all__ = ["Grid", "Operators", "Problem", "grid_coordinates"]
 
@@ -88,7 +93,7 @@ class Operators:
             self._operators = {}
             self.first = self.operator(self._weights(fresh, True))
             self.history_kernels = history_kernels(*(s if m is not None else None
-                                                     for s, m in zip(spectra, fresh)))
+                                                     for s, m in zip(spectra, fresh, strict=True)))
             self.next = self.operator(self._weights(fresh, False)) \
                 if instants > 1 else self.first
             #: the time rule each body's memory applies ("auto" resolved), None without one
@@ -108,7 +113,7 @@ class Operators:
     def instant_weights(self, mems) -> list:
         """The creep weights of the next instant's traction, one per body [1]."""
         return [self._body_weight(b, m, None if m is None else m.instant_weight)
-                for b, m in zip(self.bodies, mems)]
+                for b, m in zip(self.bodies, mems, strict=True)]
 
     def new_memories(self) -> list:
         """A fresh memory per viscoelastic body (None for the others): one recursion per
@@ -139,7 +144,7 @@ class Operators:
     def _weights(self, mems, first):
         return [self._body_weight(b, m, None if m is None else
                                   (m.weight0 if first else m.weight))
-                for b, m in zip(self.bodies, mems)]
+                for b, m in zip(self.bodies, mems, strict=True)]
 
     def kernels(self) -> list:
         """Every kernel the run convolves with (the compliant operators' and the history's)."""
@@ -301,10 +306,11 @@ class Problem:
         model, and the fit of a creep function from a table."""
         out = {}
         sides = ("indenter", "halfspace")
-        used = [f"{side}: {rule}" for side, rule in zip(sides, self.ops.rules) if rule]
+        used = [f"{side}: {rule}" for side, rule in zip(sides, self.ops.rules, strict=True)
+                if rule]
         if used:
             out["time_rule_resolved"] = ", ".join(used)
-        for side, b in zip(sides, self.ops.bodies):
+        for side, b in zip(sides, self.ops.bodies, strict=True):
             if b.split:
                 out[f"{side}_poisson_model"] = ("elastic bulk: the Poisson ratio varies "
                                                 "from its value where phi = 1")

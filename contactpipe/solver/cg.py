@@ -40,16 +40,28 @@ bound-constrained QP and no multiplier is fitted.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from .fallback import Outcome, cg_with_fallback, fista
-from .projection import (DAMPING, POLISH, _polish, _project_cells, _restore_by_shift,  # noqa: F401
-                         _shift_root, box_jacobian, box_project, disk_jacobian, disk_project,
-                         project_box_sum, project_rows)
-from .ledger import Ledger, Move, dot as _dot
+from .ledger import Ledger, Move
+from .ledger import dot as _dot
+from .projection import (  # noqa: F401
+    DAMPING,
+    POLISH,
+    _polish,
+    _project_cells,
+    _restore_by_shift,
+    _shift_root,
+    box_jacobian,
+    box_project,
+    disk_jacobian,
+    disk_project,
+    project_box_sum,
+    project_rows,
+)
 
 __all__ = ["BlockSums", "BoxOptions", "BoxResult", "Outcome", "Start", "ComponentSums",
            "Constraints", "box_cg", "cg_with_fallback", "feasible_start", "fista",

@@ -51,8 +51,7 @@ from .cg import Constraints
 from .joint import finish, finish_vector, solve_joint, solve_joint_vector
 from .normal import NormalControl, NormalResult, solve_normal
 from .options import TUNING, Tuning
-from .tangential import (TangentialResult, follow_bound, force_rows, solve_scalar,
-                         solve_vector)
+from .tangential import TangentialResult, follow_bound, force_rows, solve_scalar, solve_vector
 
 __all__ = ["Controls", "FREEDOMS", "InstantResult", "Previous", "Tolerances",
            "follow_bound", "solve_instant"]

@@ -57,8 +57,8 @@ pass's start, the instant's final state) ride on the last step the same way.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 

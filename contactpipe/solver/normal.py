@@ -34,8 +34,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cg import (BoxOptions, Constraints, Outcome, Start, box_cg, cg_with_fallback, fista,
-                 project_rows)
+from .cg import (
+    BoxOptions,
+    Constraints,
+    Outcome,
+    Start,
+    box_cg,
+    cg_with_fallback,
+    fista,
+    project_rows,
+)
 
 __all__ = ["COARSE_TOL", "COARSEST", "NormalControl", "NormalResult", "prolong", "restrict",
            "solve_normal"]

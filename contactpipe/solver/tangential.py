@@ -40,10 +40,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cg import (BoxOptions, ComponentSums, Constraints, Outcome, Start, box_cg,
-                 cg_with_fallback as _cg_with_fallback,
-                 disk_project, fista, project_box_sum, project_rows)
 from .blocks import DirectOperator
+from .cg import (
+    BoxOptions,
+    ComponentSums,
+    Constraints,
+    Outcome,
+    Start,
+    box_cg,
+    disk_project,
+    fista,
+    project_box_sum,
+    project_rows,
+)
+from .cg import cg_with_fallback as _cg_with_fallback
 from .disk_cg import DiskOptions, disk_cg, disk_start
 from .ledger import Ledger
 from .options import TUNING

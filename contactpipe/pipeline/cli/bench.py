@@ -67,8 +67,8 @@ import time
 
 import numpy as np
 
-from ...exceptions import SceneError
 from ..._util.files import check_output_path, write_text
+from ...exceptions import SceneError
 from ...scene import Scene
 from ...simulation import simulate
 from ...solver.convolution import Convolver

@@ -36,11 +36,17 @@ import signal
 import sys
 import warnings
 
-from ..._version import __version__
-from ...exceptions import (ArchiveError, ContactpipeError, OutputPathError, ResumeNotice,
-                          SceneError, one_line)
 from ..._util.files import LockedError, check_output_path, make_folder
 from ..._util.interrupts import deferred, pending, raise_if_signalled, signals_as_interrupt
+from ..._version import __version__
+from ...exceptions import (
+    ArchiveError,
+    ContactpipeError,
+    OutputPathError,
+    ResumeNotice,
+    SceneError,
+    one_line,
+)
 
 __all__ = ["main", "build_parser"]
 
@@ -81,7 +87,7 @@ def _add_run(sub):
 
 
 def _run(args) -> int:
-    from ...scene import Scene            # light: numpy, tomllib and the scene modules
+    from ...scene import Scene  # light: numpy, tomllib and the scene modules
     scene = Scene.from_toml(args.scene)
     inputs = [args.scene, *scene.input_files()]
     output = check_output_path(args.output, "archive (-o)", inputs=inputs)
@@ -90,7 +96,7 @@ def _run(args) -> int:
         figure = check_output_path(args.figure, "figure (--figure)", inputs=inputs,
                                    others=[("archive (-o)", output)])
     tangential = None if args.tangential in (None, "auto") else args.tangential
-    from ...simulation import simulate    # heavy (xarray, dask, FFT): after the checks
+    from ...simulation import simulate  # heavy (xarray, dask, FFT): after the checks
     try:
         ds = simulate(scene, output, progress=not args.no_progress, tangential=tangential,
                       fft=args.fft, threads=args.threads, resume=args.resume)

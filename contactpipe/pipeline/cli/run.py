@@ -102,17 +102,18 @@ import time as _time
 
 from tqdm.auto import tqdm
 
+from ..._util.files import TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock, make_folder
+from ..._util.files import utc_now as _now
+from ..._util.files import write_json as _write_json
 from ...exceptions import ArchiveError, ContactpipeError
 from ...exceptions import one_line as _one_line
-from ..._util.files import (TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock,
-                     make_folder, utc_now as _now, write_json as _write_json)
 from ..compare import tables as compare_stage
+from ..compare.reference import closed_form_for
 from ..figures import plot as plot_stage
-from . import stress as stress_stage
+from ..sweep import SweepLockedError, sweep
 from ..sweep.combine import open_sweep
 from ..sweep.config import CLOSED_FORM, FIGURES, MEMBER_FIGURES, PipelineSpec, read_pipeline_file
-from ..compare.reference import closed_form_for
-from ..sweep import SweepLockedError, sweep
+from . import stress as stress_stage
 
 __all__ = ["run_pipeline", "read_pipeline_file", "PipelineSpec", "PipelineResult",
            "PipelineLockedError", "MEMBER_FIGURES", "FIGURES", "LOCK", "SUMMARY",

@@ -34,14 +34,14 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
+from ..._util.files import atomic_path, check_output_path, make_folder
 from ...archive import open_archive
 from ...archive.schema import scene_table
 from ...exceptions import ArchiveError, ContactpipeError, one_line
 from ...post.fatigue import fatigue
-from ..._util.files import atomic_path, check_output_path, make_folder
 from ...post.stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
-from ..sweep.config import StressSpec
 from ..figures.plot import plot_stress, save_figure
+from ..sweep.config import StressSpec
 
 __all__ = ["add_arguments", "main", "parse_depths", "parse_time", "write_stress_product",
            "product_record", "stored_digest", "SETTINGS_ATTR", "DIGEST_ATTR"]

@@ -8,8 +8,8 @@ import pathlib
 import numpy as np
 import xarray as xr
 
-from ...exceptions import ArchiveError
 from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from ...exceptions import ArchiveError
 
 __all__ = ["check_table_path", "write_table", "format_table", "TABLE_SUFFIXES"]
 

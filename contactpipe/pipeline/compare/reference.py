@@ -57,9 +57,9 @@ import numpy as np
 
 from ... import analytic
 from ...exceptions import ArchiveError, SceneError
-from ...post.fretting import loop_cycles
 from ...materials import composite_modulus
 from ...planning import pair_couples
+from ...post.fretting import loop_cycles
 from ..inputs import scene_of
 
 __all__ = ["ClosedForm", "closed_form_for", "closed_form_solution", "diagnose",

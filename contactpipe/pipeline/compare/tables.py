@@ -46,9 +46,8 @@ import xarray as xr
 from ...archive import open_archive
 from ...exceptions import ArchiveError
 from ..inputs import grid_of, radius_of_area, scene_of
+from .output import TABLE_SUFFIXES, check_table_path, format_table, write_table
 from .reference import LOADING_FORMS, closed_form_solution
-
-from .output import TABLE_SUFFIXES, check_table_path, write_table, format_table
 
 __all__ = ["compare", "load_dataset", "write_table", "format_table", "check_table_path",
            "physical_scales", "TABLE_SUFFIXES"]

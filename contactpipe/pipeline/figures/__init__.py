@@ -2,6 +2,6 @@
 (:mod:`.plot`), the panels of the stress figure (:mod:`.stress`), the fretting map
 (:mod:`.fretting`) and its regime table (:mod:`.regimes`), all drawn into the figure of
 :mod:`.canvas` when no axes are given."""
-from .canvas import (new_figure, axes_of, FIGSIZE, DPI)
+from .canvas import DPI, FIGSIZE, axes_of, new_figure
 
 __all__ = ["new_figure", "axes_of", "FIGSIZE", "DPI"]

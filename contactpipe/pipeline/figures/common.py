@@ -14,10 +14,10 @@ from ... import analytic
 from ...exceptions import ArchiveError, ContactpipeError
 from ...materials import composite_modulus
 from ...post.stress import is_stress_file, open_stress
-from ..sweep.combine import open_sweep
 from ..compare import load_dataset
-from ..inputs import radius_of_area, scene_of
 from ..compare.reference import ClosedForm, closed_form_for, closed_form_solution
+from ..inputs import radius_of_area, scene_of
+from ..sweep.combine import open_sweep
 
 __all__ = ["input_kind", "open_input", "has_tangential_load", "figure_applies"]
 

@@ -5,8 +5,9 @@
 file (written by ``contactpipe stress`` or the pipeline's ``[stress]`` product);
 ``contactpipe plot SWEEP_DIR/ -o FIG.png [--kind sweep] [--variable NAME]`` for a sweep
 folder, ``contactpipe plot SWEEP_DIR/ -o FIG.png --kind fretting-map [--against mu|W]`` for
-the fretting map of a displacement-controlled fretting sweep. Each kind of input takes its own kinds (:data:`INPUTS`); a kind that does not
-apply to the input is one line on stderr and exit status 2, nothing written.
+the fretting map of a displacement-controlled fretting sweep. Each kind of input takes its
+own kinds (:data:`INPUTS`); a kind that does not apply to the input is one line on stderr
+and exit status 2, nothing written.
 
 - :func:`plot_profiles`: p/pH and q1/pH against x1/aH through the centre at a few
   instants, the closed form (black dashes) or a reference archive (black dots) drawn
@@ -47,20 +48,34 @@ import warnings
 
 import numpy as np
 
-from ...exceptions import ArchiveError, ContactpipeError, SceneError, one_line
 from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
 from ..._util.interrupts import raise_if_signalled
+from ...exceptions import ArchiveError, ContactpipeError, SceneError, one_line
+from ..inputs import centre_rows, grid_of, scene_of
 from ..sweep.combine import MANIFEST
 from .canvas import DPI, FIGSIZE, new_figure
+from .common import (
+    CLOSED_STYLE,
+    INPUTS,
+    KINDS,
+    _dataset,
+    _default_instants,
+    _index,
+    _opened,
+    _profile,
+    _scales,
+    _scene_title,
+    _solution,
+    _time_label,
+    figure_applies,
+    has_tangential_load,
+    input_kind,
+    open_input,
+)
 from .fretting import plot_energy_ratio, plot_fretting_map
-from ..inputs import centre_rows, grid_of, scene_of
-from .stress import plot_stress as draw_stress, plot_stress_section, plot_stress_surface
-
-from .common import (INPUTS, KINDS, input_kind, open_input, _opened, _dataset,
-                     has_tangential_load, figure_applies, _time_label,
-                     _scales, _profile, _index, _default_instants,
-                     _solution, _scene_title, CLOSED_STYLE)
 from .series import plot_hysteresis, plot_radii
+from .stress import plot_stress as draw_stress
+from .stress import plot_stress_section, plot_stress_surface
 from .sweeps import plot_sweep
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
@@ -167,7 +182,7 @@ def _profiles(ds, ks, sol, ref, fig):
     span = t_all[-1] - t_all[0]
     for n, k in enumerate(ks):
         c, label = f"C{n % 10}", _time_label(ds, k)
-        for ax, name in zip(panels, ("p", "q1")):
+        for ax, name in zip(panels, ("p", "q1"), strict=False):
             ax.plot(x1 / aH, _profile(ds[name], k, rows) / pH, "o-", ms=3, lw=1.2,
                     color=c, label=label)
         if sol is not None:
@@ -178,7 +193,7 @@ def _profiles(ds, ks, sol, ref, fig):
     grey_label = (f"closed form ({sol.name.replace('_', '-')})" if sol is not None else
                   "reference archive" if ref is not None else None)
     grey_style = CLOSED_STYLE if sol is not None else REFERENCE_STYLE
-    for ax, name in zip(panels, ("p", "q1")):
+    for ax, name in zip(panels, ("p", "q1"), strict=False):
         if grey_label:
             ax.plot([], [], **grey_style, label=grey_label)
         ax.set_ylabel(f"{name} / {pn}")

@@ -21,11 +21,11 @@ import pathlib
 import numpy as np
 import xarray as xr
 
-from ...exceptions import ArchiveError
 from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
+from ...exceptions import ArchiveError
 from ...post.fretting import boundary_constants, fretting_regime
-from ..sweep.combine import open_member
 from ..inputs import scene_of
+from ..sweep.combine import open_member
 from ..sweep.manifest import read_manifest
 from ..sweep.members import coord_value, label_of
 

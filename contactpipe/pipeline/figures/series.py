@@ -8,8 +8,7 @@ import numpy as np
 
 from ...exceptions import ArchiveError
 from .canvas import axes_of
-
-from .common import (_dataset, _frictional, _solution, _scene_title, CLOSED_STYLE)
+from .common import CLOSED_STYLE, _dataset, _frictional, _scene_title, _solution
 
 __all__ = ["plot_hysteresis", "plot_radii"]
 

@@ -57,7 +57,7 @@ MATH_LABELS = {
 def _new_axes(ax, fig, ncols=1):
     """(Figure, list of Axes): ``ax`` and its figure, or ``ncols`` Axes side by side in
     ``fig`` (a new 8 x 5 in figure at 100 dpi when None, as plot.new_figure)."""
-    from matplotlib.figure import Figure    # heavy: only when a figure is drawn
+    from matplotlib.figure import Figure  # heavy: only when a figure is drawn
     if ax is not None:
         return ax.get_figure(), [ax]
     if fig is None:
@@ -140,7 +140,7 @@ def plot_stress_section(data, field=None, time=None, ax=None):
     k3, k1 = np.unravel_index(int(np.nanargmax(sec)), sec.shape)
     if mesh is not None:
         fig.colorbar(mesh, ax=ax, label=label)
-        from matplotlib.patheffects import withStroke     # heavy: only when drawing
+        from matplotlib.patheffects import withStroke  # heavy: only when drawing
         # outlined and not clipped: whole, and seen on white, when it lies at x3 = 0
         ax.plot(x1[k1], x3[k3], "w+", ms=12, mew=2, clip_on=False,
                 path_effects=[withStroke(linewidth=4, foreground="k")])
@@ -184,7 +184,7 @@ def plot_stress(data, field=None, time=None, fig=None):
     Returns the Figure (a new one unless ``fig`` is given).
     """
     fig, axes = _new_axes(None, fig, ncols=2)
-    from matplotlib.layout_engine import TightLayoutEngine    # heavy: only when drawing
+    from matplotlib.layout_engine import TightLayoutEngine  # heavy: only when drawing
     if isinstance(fig.get_layout_engine(), TightLayoutEngine):
         fig.get_layout_engine().set(w_pad=4.0)   # the section's colour-bar label clear of
     plot_stress_section(data, field, time, ax=axes[0])         # the map's x2 label

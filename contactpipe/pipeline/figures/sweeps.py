@@ -9,8 +9,7 @@ import numpy as np
 from ...exceptions import ArchiveError
 from ...nomenclature import VARIABLES
 from .canvas import axes_of
-
-from .common import (_opened)
+from .common import _opened
 
 __all__ = ["plot_sweep"]
 
@@ -114,7 +113,7 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
             if extra else [()]
         xs_all = sw[xname] if xname in sw.variables else None
         for n, combo in enumerate(combos):
-            sel = dict(zip(extra, combo))
+            sel = dict(zip(extra, combo, strict=True))
             y = da.isel(sel) if sel else da
             xv = y[xname] if xs_all is None else \
                 xs_all.isel({d: i for d, i in sel.items() if d in xs_all.dims})

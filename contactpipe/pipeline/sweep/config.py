@@ -53,13 +53,13 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ...exceptions import SceneError
-from ...post.fatigue import CRITERIA
 from ..._util.files import read_toml
+from ...exceptions import SceneError
 from ...nomenclature import SERIES, VARIABLES
+from ...post.fatigue import CRITERIA
+from ...post.stress import BODIES, MAX_DEPTH_SIDES
 from ...scene import Scene
 from ...scene.parts import MAX_SIDE
-from ...post.stress import BODIES, MAX_DEPTH_SIDES
 from ...scene.tables import Field, Reader, did_you_mean, nesting_depth, show
 from .members import MODES
 

@@ -131,22 +131,25 @@ import stat
 import sys
 import time
 
-from ...planning.accuracy import resolve_accuracy
+from ..._util.files import TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock, make_folder
 from ...archive import open_archive
 from ...exceptions import ArchiveError, SceneError, one_line
-from ..._util.files import (LockedError, TEMP_SUFFIX, check_output_dir, exclusive_lock,
-                     make_folder)
 from ...planning import check_time, estimate_resources
+from ...planning.accuracy import resolve_accuracy
 from ...scene import Scene
+from ..inputs import scene_digest
 from .combine import open_member, open_sweep
 from .config import SweepFile, load_sweep_file, read_sweep_file
 from .execute import SYNCHRONOUS, execute
-from ..inputs import scene_digest
-from .manifest import (MANIFEST, new_manifest, previous_records, read_manifest,
-                       write_manifest)
+from .manifest import MANIFEST, new_manifest, previous_records, read_manifest, write_manifest
 from .members import MODES, Member, build_members, dim_names, label_of
-from .parameters import (derived_parameters, register_parameter, relaxation_time,
-                         tau_ratio, with_window)
+from .parameters import (
+    derived_parameters,
+    register_parameter,
+    relaxation_time,
+    tau_ratio,
+    with_window,
+)
 
 __all__ = ["sweep", "open_sweep", "open_member", "SweepResult", "Member",
            "SweepLockedError", "ScriptReimportError", "register_parameter", "derived_parameters",

@@ -51,9 +51,9 @@ import time
 
 from tqdm.auto import tqdm
 
+from ..._util.files import atomic_path
 from ...archive import open_archive
 from ...exceptions import ArchiveError, ContactpipeError, one_line
-from ..._util.files import atomic_path
 from ...simulation import simulate
 from ..inputs import scene_digest
 

@@ -25,9 +25,9 @@ import numbers
 import pathlib
 import re
 
+from ..._util.files import utc_now, write_json
 from ..._version import __version__
 from ...exceptions import ArchiveError
-from ..._util.files import utc_now, write_json
 from .members import MODES, STATUSES, coord_value, jsonable
 
 __all__ = ["MANIFEST", "MANIFEST_FORMAT", "read_manifest", "check_manifest", "new_manifest",
