@@ -11,8 +11,10 @@ import pytest
 
 import contactpipe as cp
 from contactpipe.planning import plan as make_plan
+from contactpipe.planning.accuracy import PRELOAD_TARGET
 from contactpipe.simulation import march as simulation
 from contactpipe.simulation.march import State
+from contactpipe.simulation.preload import PATH_TOLERANCE
 from contactpipe.simulation.problem import Problem
 from contactpipe.solver import window
 from contactpipe.solver.coupling import Previous, Tolerances, solve_instant
@@ -200,8 +202,11 @@ def test_a_run_with_windows_matches_one_without(monkeypatch, case):
     if case == "steel-steel":                      # no preload: the shear starts at T
         assert float(ds.fft_pairs[1:].mean()) < 0.8 * float(ref.fft_pairs[1:].mean())
         return
+    # the estimate's coarse paths are solved to PATH_TOLERANCE of the error target (1e-7
+    # of mu p_max here), so two ways of solving them agree to that, not to their rounding
+    # (measured 4.7e-8 to 5.5e-8 on maxwell-fretting with the vector form, by FFTW plan)
     assert ds.attrs["preload_error_estimate"] == pytest.approx(
-        ref.attrs["preload_error_estimate"], rel=1e-5)
+        ref.attrs["preload_error_estimate"], rel=0, abs=PATH_TOLERANCE * PRELOAD_TARGET)
     assert float(ds.fft_pairs[0]) < 0.7 * float(ref.fft_pairs[0])
     if case == "maxwell-fretting":
         assert float(ds.fft_pairs[1:].mean()) < 0.8 * float(ref.fft_pairs[1:].mean())
