@@ -24,6 +24,7 @@ import numpy as np
 
 from . import analytic
 from .materials import kelvin_voigt, maxwell, prony, zener
+from .nomenclature import STATUS_SLIP, STATUS_STICK
 from .scene import Scene
 from .scene.loading import FREEDOMS
 
@@ -172,7 +173,7 @@ def _dissipation(ds, scene, mu, bad):
     ds1, ds2 = np.diff(s1, axis=0), np.diff(s2, axis=0)
     status = np.asarray(ds["status"].values)[1:]
     work = q1[1:] * ds1 + q2[1:] * ds2
-    slipping = status == 2
+    slipping = status == STATUS_SLIP
     tol = scene.solver.tolerance
     slip_scale = max(float(np.abs(ds["omega1"].values).max()),
                      float(np.abs(ds["omega2"].values).max()),
@@ -188,7 +189,7 @@ def _dissipation(ds, scene, mu, bad):
     if np.any(np.diff(d) < -allowed):
         bad.append(f"dissipation decreases (by {-np.diff(d).min():.3g} J, more than the "
                    f"{allowed:.3g} J the solver resolves)")
-    stick = status == 1
+    stick = status == STATUS_STICK
     if np.any(ds1[stick] != 0) or np.any(ds2[stick] != 0):
         bad.append("slip increment in a stick cell")
 

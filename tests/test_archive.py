@@ -26,7 +26,7 @@ from contactpipe.archive import (
     validate,
 )
 from contactpipe.exceptions import ArchiveError
-from contactpipe.nomenclature import VARIABLES
+from contactpipe.nomenclature import STATUS_STICK, VARIABLES
 from contactpipe.pipeline.cli import main as cli_main
 from contactpipe.testing import TINY_SCENES
 
@@ -76,7 +76,7 @@ def synthetic_steps():
             "W": float(p.sum() * cell), "T1": float(q1.sum() * cell), "T2": 0.0,
             "omega1": 1e-7 * c, "omega2": 0.0, "omega3": 1e-6 * (1 + k),
             "contact_area": float(inside.sum() * cell),
-            "stick_area": float((status == 1).sum() * cell),
+            "stick_area": float((status == STATUS_STICK).sum() * cell),
             "dissipation": dissipation, "iterations": 10 + k,
             "M1": float((p * X2[None, :]).sum() * cell),
             "M2": float((p * X1[:, None]).sum() * cell),

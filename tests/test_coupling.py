@@ -200,9 +200,6 @@ def _coarse_vector_steps_without(switch, fewer, cost="iterations", replaced_accu
     slow = run(replace(TUNING, **{switch: False}))
     scale = float(ref.p.max())
     for ds, check in ((fast, True), (slow, replaced_accurate)):
-        print(float(np.abs(ds.p - ref.p).max()) / scale,
-              max(float(np.abs(ds[n] - ref[n]).max()) for n in ("q1", "q2")) / (MU * scale),
-              ds[cost].values[1:].sum())
         assert int((ds.status != ref.status).sum()) == 0
         if check:
             assert float(np.abs(ds.p - ref.p).max()) <= 1e-7 * scale
@@ -248,6 +245,4 @@ def test_vector_warm_starts_reach_the_plain_instants():
         scale = float(b.p.max())
         assert np.abs(a.p - b.p).max() <= 1e-7 * scale
         assert np.abs(a.q - b.q).max() <= 1e-7 * MU * scale
-        print(np.abs(a.p - b.p).max() / scale, np.abs(a.q - b.q).max() / (MU * scale))
-    print(fast_pairs, plain_pairs)
     assert fast_pairs < plain_pairs

@@ -259,3 +259,14 @@ def test_public_paths_import_without_a_warning():
                         "contactpipe.pipeline.cli", "--help"],
                        cwd=ROOT, capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 0 and "usage: contactpipe" in r.stdout, r.stderr[-3000:]
+
+
+def test_no_print_in_tests():
+    """Tests assert; they print nothing (a diagnostic that matters is an assertion's
+    message). Code that a test runs in another process is text, not a call here."""
+    found = []
+    for p in sorted((ROOT / "tests").glob("*.py")):
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "print":
+                found.append(f"{p.name}:{node.lineno}")
+    assert not found, found

@@ -11,6 +11,7 @@ import xarray as xr
 from helpers import fretting_scene
 
 import contactpipe as cp
+from contactpipe.nomenclature import STATUS_SLIP, STATUS_STICK
 from contactpipe.testing import assert_contact_laws, contact_law_violations
 
 SCENE = fretting_scene(n=32, steps=10, mu=0.1).replace({"solver.fft": "scipy"})
@@ -53,14 +54,14 @@ def test_two_halves(tmp_path):
     mu = ds["mu"].values
     p, q = ds.p.values, np.hypot(ds.q1.values, ds.q2.values)
     assert np.all(q <= mu * p * (1 + 1e-9))
-    slip = ds.status.values == 2
+    slip = ds.status.values == STATUS_SLIP
     np.testing.assert_allclose(q[slip], (mu * p)[slip], rtol=1e-9)
     assert slip[:, X1 < 0].any() and slip[:, X1 > 0].any()
     assert_contact_laws(ds)
     cell = X1[1] - X1[0]
     x1 = np.broadcast_to(X1[:, None], (32, 32))
     for k in range(1, ds.sizes["time"]):
-        stick = ds.status.values[k] == 1
+        stick = ds.status.values[k] == STATUS_STICK
         lean = x1[stick].mean() / cell
         assert lean > 0.0
         if k in (2, 6, 10):                         # T = +90, -90, +90 N

@@ -83,7 +83,6 @@ def test_lee_radok_step_load(name):
     keys, creep = CASES[name]
     err_lin = lee_radok_error(cp.simulate(creep_scene(keys, "linear", 20)), creep)
     err_ss = lee_radok_error(cp.simulate(creep_scene(keys, "step_start", 20)), creep)
-    print(f"Lee-Radok {name}: linear {err_lin:.2e}, step_start {err_ss:.2e}")
     assert err_lin < 0.01, f"Lee-Radok ({name}, linear rule): {err_lin:.2e}"
     assert err_ss < 0.01, f"Lee-Radok ({name}, step-start rule): {err_ss:.2e}"
 
@@ -120,7 +119,6 @@ def test_ramp_load_time_rules(rule, steps, bound):
     a_num = np.sqrt(R * np.clip(ds.omega3.values, 0, None))
     m = t >= 0.25
     err = np.abs(a_num[m] ** 3 / a_ex[m] ** 3 - 1).max()
-    print(f"ramp, {rule}, {steps} steps: {err:.2e}")
     assert err < bound
 
 

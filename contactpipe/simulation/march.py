@@ -42,7 +42,7 @@ from ..exceptions import (
     ResumeNotice,
     one_line,
 )
-from ..nomenclature import variables_for
+from ..nomenclature import STATUS_STICK, variables_for
 from ..planning import check_resources, estimate_resources
 from ..planning import plan as make_plan
 from ..planning.accuracy import resolve_accuracy
@@ -310,7 +310,7 @@ def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
         rec.update({"q1": q[0], "q2": q[1], "u1": u[0], "u2": u[1], "s1": s[0], "s2": s[1],
                     "T1": float(q[0].sum() * cell), "T2": float(q[1].sum() * cell),
                     "omega1": omega[0], "omega2": omega[1],
-                    "stick_area": float(np.count_nonzero(status == 1) * cell),
+                    "stick_area": float(np.count_nonzero(status == STATUS_STICK) * cell),
                     "dissipation": st.dissipation, "coupling_passes": int(passes)})
     return rec
 

@@ -1,5 +1,5 @@
-"""The coupled instant's faster paths (issue 12): each must give the answer of the path it
-replaces to within the tolerance.
+"""The joint solve and the ledger of deferred products, against the paths they replace: each
+must give the answer of the path it replaces to within the tolerance.
 
 * the joint solves over (p, q1) and (p, q1, q2) (:mod:`contactpipe.solver.joint`)
   against block Gauss-Seidel passes;
@@ -20,6 +20,7 @@ import pytest
 from helpers import A_HERTZ, MU, P0_HERTZ, W, fretting_scene, make_scene
 
 import contactpipe as cp
+from contactpipe.nomenclature import STATUS_SLIP, STATUS_STICK
 from contactpipe.solver import coupling, joint
 from contactpipe.solver.cg import BlockSums, BoxOptions, box_cg
 from contactpipe.solver.coupling import Previous, follow_bound
@@ -99,7 +100,7 @@ def test_joint_finish_keeps_coulomb_and_the_force_rows_exact():
     cell = float((ds.x1[1] - ds.x1[0]) * (ds.x2[1] - ds.x2[0]))
     w = float(ds.W.max())
     assert (np.abs(q1) - MU * p).max() <= 0.0
-    slip = ds.status.values == 2
+    slip = ds.status.values == STATUS_SLIP
     assert slip.any()
     assert np.abs(np.abs(q1[slip]) - MU * p[slip]).max() <= 1e-12 * MU * p.max()
     assert np.abs(q1.sum(axis=(1, 2)) * cell - ds.T1.values).max() <= 1e-12 * w
@@ -126,9 +127,6 @@ def test_joint_vector_solve_gives_the_gauss_seidel_answer(build, monkeypatch):
     p, q1, q2, w1, _ = vector_fields(fast)
     pb, q1b, q2b, w1b, _ = vector_fields(slow)
     p0 = pb.max()
-    print(np.abs(p - pb).max() / p0,
-          max(np.abs(q1 - q1b).max(), np.abs(q2 - q2b).max()) / (MU * p0),
-          np.abs(w1 - w1b).max() / np.abs(w1b).max())
     assert np.abs(p - pb).max() <= 1e-7 * p0
     assert np.abs(q1 - q1b).max() <= 1e-7 * MU * p0
     assert np.abs(q2 - q2b).max() <= 1e-7 * MU * p0
@@ -146,7 +144,7 @@ def test_joint_vector_finish_keeps_coulomb_and_the_force_rows_exact():
     cell = float((ds.x1[1] - ds.x1[0]) * (ds.x2[1] - ds.x2[0]))
     w, mp0 = float(ds.W.max()), MU * p.max()
     assert (mag - MU * p).max() <= 1e-12 * mp0
-    slip = ds.status.values == 2
+    slip = ds.status.values == STATUS_SLIP
     assert slip.any()
     assert np.abs(mag[slip] - MU * p[slip]).max() <= 1e-12 * mp0
     assert np.abs(q1.sum(axis=(1, 2)) * cell - ds.T1.values).max() <= 1e-12 * w
@@ -174,11 +172,9 @@ def test_joint_vector_solve_near_gross_slip(monkeypatch):
     fast = cp.simulate(_oblique_load(0.95), tangential="vector")
     assert all(res.converged for res in seen)
     status = fast.status.values[-1]
-    assert 0 < np.count_nonzero(status == 1) <= 0.05 * np.count_nonzero(status > 0)
+    assert 0 < np.count_nonzero(status == STATUS_STICK) <= 0.05 * np.count_nonzero(status > 0)
     slow = cp.simulate(_oblique_load(0.95), tangential="vector", tuning=NO_JOINT)
     p0 = slow.p.values.max()
-    print(np.abs(fast.p.values - slow.p.values).max() / p0,
-          max(np.abs(fast[c].values - slow[c].values).max() for c in ("q1", "q2")) / (MU * p0))
     assert np.abs(fast.p.values - slow.p.values).max() <= 1e-7 * p0
     for c in ("q1", "q2"):
         assert np.abs(fast[c].values - slow[c].values).max() <= 1e-7 * MU * p0
@@ -195,7 +191,7 @@ def test_joint_vector_solve_hands_gross_slip_to_the_passes(monkeypatch):
     assert not seen[-1].converged and seen[-1].passes == 1
     p, q1, q2 = (ds[c].values[-1] for c in ("p", "q1", "q2"))
     contact = p > 0
-    assert np.all(ds.status.values[-1][contact] == 2)
+    assert np.all(ds.status.values[-1][contact] == STATUS_SLIP)
     mag = np.hypot(q1, q2)
     assert np.abs(mag - MU * p)[contact].max() <= 1e-12 * MU * p.max()
     cell = float((ds.x1[1] - ds.x1[0]) * (ds.x2[1] - ds.x2[0]))
@@ -251,7 +247,6 @@ def test_tractions_continued_along_a_straight_load_path(form):
     slow = cp.simulate(steel_on_aluminium(), tangential=form,
                        tuning=replace(TUNING, continued_starts=False))
     assert_same(fast, slow, 1e-7, 1e-7)
-    print(fast.fft_pairs.values[1:].sum(), slow.fft_pairs.values[1:].sum())
     assert fast.fft_pairs.values[1:].sum() < slow.fft_pairs.values[1:].sum()
 
 
