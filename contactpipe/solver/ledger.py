@@ -108,6 +108,7 @@ class Ledger:
     def curvature(self, t):
         """(A t, or None in halves where it stays in spectra; tᵀA t)."""
         apply = self.apply
+        assert apply is not None, "bind() first"
         if self.halves:
             that = apply.spectra(t)
             self._rhat = apply.product(that, out=self._rhat)
@@ -124,6 +125,7 @@ class Ledger:
         if done:
             d = self._end(x, d)
         apply = self.apply
+        assert apply is not None, "bind() first"
         if self.halves:
             apply.add(Ax, self._rhat, -tau,
                       None if d is None else apply.product(apply.spectra(d)))
@@ -138,6 +140,7 @@ class Ledger:
         if converged and not self.ended:
             d = self._end(x, None)
             if d is not None and d.any():
+                assert self.apply is not None, "bind() first"
                 Ax += self.apply(d)
         return Ax
 
@@ -163,5 +166,6 @@ class Ledger:
         only a solve that did not converge has any), or A x None (not ``exact``)."""
         deferred = self.deferred.deferred
         if deferred is not None:
+            assert self.apply is not None, "bind() first"
             Ax = Ax + self.apply(deferred) if self.exact else None
         return (x if self.after is None else self.after), Ax

@@ -35,7 +35,7 @@ class BodySpectra(dict):
         The cell sides (Δ1, Δ2) [m] of the grid, where known.
     """
 
-    cell = None
+    cell: tuple[float, float] | None = None
 
     @classmethod
     def on(cls, spectra, cell):
@@ -136,46 +136,53 @@ class ContactOperator:
         s1, c1 = weighted_spectra(spectra1, self.w1)
         s2, c2 = weighted_spectra(spectra2, self.w2)
         self.rigid = s1 is None and s2 is None
-        self.k = pair_kernels(s1, s2, c1, c2) if not self.rigid else None
+        #: the pair's kernel spectra, key 'ij'; None for a rigid pair
+        self.k: dict[str, np.ndarray] | None = (pair_kernels(s1, s2, c1, c2)
+                                                 if not self.rigid else None)
         #: the cell sides (Δ1, Δ2) [m] where the spectra know them, else None
         self.cell = next((getattr(x, "cell", None) for x in (s1, s2) if x is not None), None)
-        self._derived = {}          # constants derived from the spectra, computed once
+        self._derived: dict = {}    # constants derived from the spectra, computed once
+
+    def _kernels(self) -> dict[str, np.ndarray]:
+        """The kernel spectra, which every piece below needs (a rigid pair has none)."""
+        assert self.k is not None, "a rigid pair has no kernels"
+        return self.k
 
     # -- the pieces the inner problems need -------------------------------------------
     def normal(self, p):
         """u3 [m] from the pressure p [Pa] (one FFT pair)."""
-        return self.conv.convolve(self.k["33"], p)
+        return self.conv.convolve(self._kernels()["33"], p)
 
     def tangential_scalar(self, q1):
         """u1 [m] from q1 [Pa] (one FFT pair; the Cattaneo-Mindlin form, q2 = 0)."""
-        return self.conv.convolve(self.k["11"], q1)
+        return self.conv.convolve(self._kernels()["11"], q1)
 
     def tangential_vector(self, q):
         """(u1, u2) [m] from (q1, q2) [Pa] (two FFT pairs)."""
-        k = self.k
+        k = self._kernels()
         return self.conv.convolve_matrix([[k["11"], k["12"]], [k["21"], k["22"]]], [q[0], q[1]])
 
     def tangential_blocks(self):
         """[K11 K12; K21 K22] as a :class:`~contactpipe.solver.blocks.BlockOperator`:
         applied whole, (u1, u2) [m] from (q1, q2) [Pa] as :meth:`tangential_vector`, or in
         its halves (the vector CG's steps)."""
-        k = self.k
+        k = self._kernels()
         return BlockOperator(self.conv, [[k["11"], k["12"]], [k["21"], k["22"]]])
 
     def coupling_to_normal(self, q1, q2=None):
         """u3 [m] from the shear tractions (K31, K32)."""
-        k = self.k
+        k = self._kernels()
         return self.conv.convolve_matrix([[k["31"], k["32"]]], [q1, q2])[0]
 
     def coupling_to_tangential(self, p, two_components=True):
         """(u1, u2) [m] (or u1 alone) from the pressure (K13, K23)."""
-        k = self.k
+        k = self._kernels()
         rows = [[k["13"]], [k["23"]]] if two_components else [[k["13"]]]
         return self.conv.convolve_matrix(rows, [p])
 
     def in_plane(self, q1=None, q2=None, p=None):
         """(u1, u2) [m] from all tractions (2 inverse transforms)."""
-        k = self.k
+        k = self._kernels()
         rows = [[k[f"{i}1"], k[f"{i}2"], k[f"{i}3"]] for i in (1, 2)]
         return self.conv.convolve_matrix(rows, [q1, q2, p])
 
@@ -183,7 +190,7 @@ class ContactOperator:
         """Displacement of a cell under its own unit traction, K_ij(0, 0) [m/Pa] (cached)."""
         key = ("self", component)
         if key not in self._derived:
-            k = self.k[component]
+            k = self._kernels()[component]
             m2 = self.conv.m2
             total = k[:, 0].sum() + 2.0 * k[:, 1:m2 // 2].sum() + k[:, m2 // 2].sum()
             self._derived[key] = float(np.real(total))
@@ -194,7 +201,7 @@ class ContactOperator:
         norm (the projected-gradient step; cached)."""
         if ("norm", 0) not in self._derived:
             m = self.conv.m1 * self.conv.m2
-            self._derived[("norm", 0)] = float(np.max(np.real(self.k["33"]))) * m
+            self._derived[("norm", 0)] = float(np.max(np.real(self._kernels()["33"]))) * m
         return self._derived[("norm", 0)]
 
     def tangential_norm(self, components=2):
@@ -202,7 +209,7 @@ class ContactOperator:
         upper bound of the operator's norm (the projected-gradient step; cached)."""
         key = ("norm", components)
         if key not in self._derived:
-            k = self.k
+            k = self._kernels()
             m = self.conv.m1 * self.conv.m2
             a = np.real(k["11"]) * m
             if components == 1:
@@ -228,7 +235,8 @@ class ContactOperator:
         name = ("corner", key)
         if name not in self._derived:
             conv = self.conv
-            value = float(np.real(self.k[key][conv.n1, conv.n2])) * conv.m1 * conv.m2
+            k = self._kernels()[key]
+            value = float(np.real(k[conv.n1, conv.n2])) * conv.m1 * conv.m2
             if not value > 0.0:
                 value = self.self_influence(key)
             self._derived[name] = value * float(self._root_laplacian().max())
@@ -239,7 +247,7 @@ class ContactOperator:
         (:func:`~contactpipe.solver.symbols.radial_profile`, from K33; cached)."""
         if "radial" not in self._derived:
             conv = self.conv
-            sampled = self.k["33"][::2, ::2] * (conv.m1 * conv.m2)
+            sampled = self._kernels()["33"][::2, ::2] * (conv.m1 * conv.m2)
             self._derived["radial"] = radial_profile(sampled, self.corner("33"),
                                                      self._root_laplacian())
         return self._derived["radial"]
@@ -255,8 +263,8 @@ class ContactOperator:
         """The in-plane model (:func:`~contactpipe.solver.symbols.plane_model`; cached)."""
         if "plane" not in self._derived:
             conv = self.conv
-            self._derived["plane"] = plane_model(self.k["11"], self.corner("11"), conv.n1,
-                                                 conv.n2, self.cell)
+            self._derived["plane"] = plane_model(self._kernels()["11"], self.corner("11"),
+                                                 conv.n1, conv.n2, self.cell)
         return self._derived["plane"]
 
     def normal_preconditioner(self):
@@ -366,7 +374,7 @@ class ContactOperator:
             else:
                 raise ValueError(f"band must be None, 'high' or 'low', not {band!r}")
             return self.conv.periodic_filter(symbol, v, out=out)
-        apply.finest = finest
+        apply.finest = finest  # type: ignore[attr-defined]  # a function attribute
         return apply
 
     def coarse_normal(self):
@@ -422,7 +430,7 @@ class ContactOperator:
         kept = self._derived.setdefault(("kernels",), {})
         if key not in kept:
             conv = self.conv
-            kept[key] = scipy.fft.irfft2(self.k[key] * (conv.m1 * conv.m2),
+            kept[key] = scipy.fft.irfft2(self._kernels()[key] * (conv.m1 * conv.m2),
                                          s=(conv.m1, conv.m2))
         return kept[key]
 
@@ -463,7 +471,7 @@ class ContactOperator:
         take = np.ix_(d1 % conv.m1, d2 % conv.m2)
         put = np.ix_(d1 % (2 * c1), d2 % (2 * c2))
         sub.k = {}
-        for key in self.k:
+        for key in self._kernels():
             kernel = np.zeros((2 * c1, 2 * c2))
             kernel[put] = self._in_space(key)[take]
             sub.k[key] = sub.conv.kernel_spectrum(kernel)
@@ -471,7 +479,7 @@ class ContactOperator:
 
     def full(self, p, q1=None, q2=None):
         """(u1, u2, u3) [m] from all tractions (3 forward, 3 inverse transforms at most)."""
-        k = self.k
+        k = self._kernels()
         rows = [[k[f"{i}1"], k[f"{i}2"], k[f"{i}3"]] for i in (1, 2, 3)]
         return self.conv.convolve_matrix(rows, [q1, q2, p])
 
@@ -481,7 +489,7 @@ def history_kernels(spectra1, spectra2):
     :func:`history_displacement`; built once per run. None for a body without spectra; a
     list (one per part) for a body given by its kernel parts (:func:`body_spectra_parts`)
     with more than one."""
-    out = []
+    out: list = []
     for first, spectra in ((True, spectra1), (False, spectra2)):
         if spectra is None:
             out.append(None)
