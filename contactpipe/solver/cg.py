@@ -74,7 +74,7 @@ class BoxResult:
     """Outcome of :func:`box_cg`: ``Ax`` is A times this result's own ``x``."""
 
     x: np.ndarray          # the solution, or ``follow``'s point where it moved on
-    multiplier: float      # λ of the force constraint (an (m,) array with Constraints)
+    multiplier: float | np.ndarray   # λ of the force row (an (m,) array with Constraints)
     Ax: np.ndarray | None  # A x (None only where ``exact`` False let corrections wait)
     iterations: int
     residual: float        # last relative change Σ|Δx| / scale
@@ -101,9 +101,11 @@ class Constraints:
     """
 
     def __init__(self, rows, target, sums: bool = False):
-        self.rows = np.asarray(rows, dtype=float)
+        rows = np.asarray(rows, dtype=float)
+        #: the row arrays (m, *shape); None in :class:`BlockSums`, which has none
+        self.rows: np.ndarray | None = rows
         self.target = np.atleast_1d(np.asarray(target, dtype=float))
-        self.m = int(self.rows.shape[0])
+        self.m = int(rows.shape[0])
         self.sums = bool(sums)
         if self.target.shape != (self.m,):
             raise ValueError(f"{self.m} rows need {self.m} targets, got {self.target.shape}")
@@ -117,10 +119,12 @@ class Constraints:
         """Cᵀλ, the rigid motion of the multipliers (shape of x; 0.0 without rows)."""
         if self.m == 0:
             return 0.0
+        assert self.rows is not None
         return np.tensordot(np.asarray(lam, dtype=float), self.rows, axes=1)
 
     def sums_of(self, x) -> np.ndarray:
         """C x (m,)."""
+        assert self.rows is not None
         if self.sums:
             return np.array([float(x[r != 0].sum()) for r in self.rows])
         return np.array([float(np.sum(r * x)) for r in self.rows])
@@ -131,6 +135,7 @@ class Constraints:
 
     def _on(self, cells):
         """The rows on ``cells`` (a mask over the last two axes), as an (m, k) matrix."""
+        assert self.rows is not None
         return self.rows[..., cells].reshape(self.m, -1)
 
     def fit(self, g, cells) -> np.ndarray:

@@ -136,6 +136,7 @@ class Controls:
 
     def arms(self):
         """(x1, x2) on the grid (N1, N2) and the normalising length L [m]."""
+        assert self.x1 is not None and self.x2 is not None, "moment arms x1, x2 needed"
         X1, X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
         L = max(float(np.abs(self.x1).max()), float(np.abs(self.x2).max()), 1e-300)
         return X1, X2, L
@@ -227,9 +228,13 @@ class _Instant:
         ctl, shape = self.ctl, self.gap.shape
         prev = self.prev.motion if self.prev.motion is not None else np.zeros(6)
         known = np.zeros((2,) + shape)
-        rows, targets, which = [], [], []
+        rows: list[np.ndarray] = []
+        targets: list[float] = []
+        which: list[int] = []
         if ctl.is_force(1):
-            rows.extend(force_rows(shape, self.T, self.cell).rows[: 2 if self.vector else 1])
+            force = force_rows(shape, self.T, self.cell).rows
+            assert force is not None
+            rows.extend(force[: 2 if self.vector else 1])
             targets.extend((self.T / self.cell)[: 2 if self.vector else 1])
             which.extend([1, 2][: 2 if self.vector else 1])
         else:
@@ -361,6 +366,7 @@ class _Instant:
         contact slides), else the previous shear q on its bound (nothing moves)."""
         if self.ctl.is_force(1):
             return np.stack([p * (self.T[0] / W), p * (self.T[1] / W)]) if W > 0 else q
+        assert self.rows is not None     # T displacement-controlled: not the legacy rows
         _, known, _ = self.rows
         bound = self.mu * p
         mag = np.hypot(known[0], known[1])

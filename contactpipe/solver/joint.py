@@ -165,17 +165,20 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
         res = box_cg(apply, b, lo, hi, rows, Start(x, Ax, x),
                      BoxOptions(plan.inner, max_iter, "shift", precondition=precondition),
                      Ledger(update=True, defer=tuning.defer, follow=follow, exact=True))
+        assert res.Ax is not None                 # an exact ledger leaves A x whole
         its += res.iterations
         if not res.converged:
             return JointResult(p, mu * s, mu * lag, np.nan, res.Ax, its, passes, False,
                                res.residual)
+        assert res.iterate is not None and res.move is not None   # converged: follow ran
         p, s, Ax, x = res.iterate[0], res.iterate[1], res.Ax, res.x
         if res.move.verdict == "settled":
             s = x[1]                               # the final state, folded in
-            omega3 = float(res.multiplier[0])
+            omega3 = float(np.asarray(res.multiplier)[0])   # rows given: an (m,) array
             Ax = np.stack([Ax[0], Ax[1] / mu])     # (K33 p + K31 q1, K13 p + K11 q1)
             return JointResult(p, mu * s, mu * p, omega3, Ax, its, passes, True,
                                plan.change)
+    assert Ax is not None                         # a pass ran (max_passes >= 1)
     return JointResult(p, mu * s, mu * lag, np.nan, Ax, its, max_passes, False,
                        plan.change)
 
@@ -328,6 +331,7 @@ def solve_joint_vector(op, b, W, T, cell_area, mu, p0, q0, tol, max_iter,
         res = disk_cg(A, b, Start(x, Ax), lag, con,
                       DiskOptions(plan.inner, max_iter, M, a_self, unit=mu, tuning=tuning),
                       Ledger(update=True, defer=tuning.defer, follow=follow), pressure)
+        assert res.Ax is not None                 # an exact ledger leaves A x whole
         its += res.iterations
         verdict = res.move.verdict if res.move is not None else ""
         if not res.converged or verdict == "sliding":

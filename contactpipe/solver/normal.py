@@ -77,23 +77,24 @@ class NormalControl:
         W [N], M1, M2 [N m]; NaN where the freedom is displacement-controlled.
     motion : ndarray (3,)
         ω3 [m], φ1, φ2 [rad]; NaN where the freedom is force-controlled.
-    x1, x2 : ndarray
-        Cell centres (N1,), (N2,) [m]: the moment arms.
+    x1, x2 : ndarray or None
+        Cell centres (N1,), (N2,) [m]: the moment arms (None where W alone is held).
     """
 
     force: np.ndarray
     motion: np.ndarray
-    x1: np.ndarray
-    x2: np.ndarray
+    x1: np.ndarray | None       # None only where W alone is held (``legacy``)
+    x2: np.ndarray | None
 
     @property
     def legacy(self) -> bool:
         """W force-controlled and both rotations held at zero: the one-row problem."""
-        return (not np.isnan(self.force[0]) and np.isnan(self.force[1:]).all()
-                and np.all(self.motion[1:] == 0.0))
+        return bool(not np.isnan(self.force[0]) and np.isnan(self.force[1:]).all()
+                    and np.all(self.motion[1:] == 0.0))
 
     def arms(self):
         """(x1, x2) on the grid (N1, N2) and the normalising length L [m]."""
+        assert self.x1 is not None and self.x2 is not None, "moment arms x1, x2 needed"
         X1, X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
         L = max(float(np.abs(self.x1).max()), float(np.abs(self.x2).max()), 1e-300)
         return X1, X2, L
@@ -296,5 +297,6 @@ def _force_only(op, gap0, W, cell_area, p0, tol, max_iter, Ap0, precondition=Non
     res = box_cg(op.normal, gap0, np.zeros_like(gap0), np.full_like(gap0, np.inf),
                  W / cell_area, Start(p0, Ap0),
                  BoxOptions(tol, max_iter, "scale", precondition=precondition))
-    return NormalResult(res.x, res.multiplier, res.Ax, res.iterations, res.residual,
+    assert res.Ax is not None                  # the default ledger is exact
+    return NormalResult(res.x, float(res.multiplier), res.Ax, res.iterations, res.residual,
                         res.converged)

@@ -313,6 +313,7 @@ def slip_multipliers(g, q, bound, con):
     mag = np.hypot(q[0], q[1])[cells]
     qh = q[:, cells] / np.where(mag > 0, mag, 1.0)
     nh = np.stack([-qh[1], qh[0]])
+    assert con.rows is not None                                # force rows, not BlockSums
     A = con.rows[..., cells]                                   # (m, 2, k)
     gs = g[:, cells]
     perp = np.einsum("ik,mik->km", nh, A)                       # (k, m)
