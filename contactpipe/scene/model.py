@@ -133,7 +133,7 @@ class Scene:
         given = dict(name=name, geometry=geometry, indenter=indenter, halfspace=halfspace,
                      friction=friction, load=load, grid=grid, time=time, solver=solver,
                      output=output, **unknown)
-        problems = []
+        problems: list[str] = []
         r = Reader(given, "", problems, title="the scene")
         r.check_keys(FIELDS)
         parts = r.read(FIELDS)

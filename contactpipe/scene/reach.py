@@ -128,7 +128,8 @@ def contact_shifts(geometry, load):
     if geometry.shape == "surface":
         return None
     t, W = load.knots()[:2]
-    out = [(0.0, None, None, None, 0.0)] * 2
+    out: list[tuple[float, str | None, float | None, float | None, float]] = [
+        (0.0, None, None, None, 0.0)] * 2
     if geometry.shape == "flat_punch":
         return tuple(out)
     radii = (geometry.radius,) * 2 if geometry.shape == "sphere" else geometry.radii

@@ -42,7 +42,7 @@ class BlockOperator:
         self.conv = conv
         self.khat = [list(row) for row in khat]
         self.n = len(self.khat)
-        self._tmp = None
+        self._tmp: np.ndarray | None = None
 
     def __call__(self, x, out=None):
         """A x [m] (x stacked (n, N1, N2)); a zero block costs no forward transform."""
@@ -52,7 +52,8 @@ class BlockOperator:
     def spectra(self, x):
         """The zero-padded fields' spectra, None for a zero field (no transform spent).
         They lie in the engine's forward buffers: valid until the next call."""
-        out, n = [], 0
+        out: list[np.ndarray | None] = []
+        n = 0
         for f in x:
             if f.any():
                 out.append(self.conv.forward_slot(f, n))

@@ -26,7 +26,7 @@ try:  # pragma: no cover - exercised when pyfftw is installed
     from . import wisdom
     HAVE_PYFFTW = True
 except ImportError:  # pragma: no cover
-    pyfftw = wisdom = None
+    pyfftw = wisdom = None  # type: ignore[assignment]  # optional modules, absent
     HAVE_PYFFTW = False
 
 __all__ = ["Convolver", "HAVE_PYFFTW"]
@@ -88,7 +88,7 @@ class Convolver:
             self._rin = np.zeros((self.m1, self.m2))
         self.plan_time_s = time.perf_counter() - t0
         self._tmp = np.zeros(self.spec_shape, dtype=complex)
-        self._periodic = {}
+        self._periodic: dict[tuple, tuple] = {}
 
     def _plan_pruned(self, planner):
         """The padded grid's transforms, pruned of the padding's zeros.
@@ -333,14 +333,14 @@ class Convolver:
         for i in range(nout):
             have = False
             for j in range(nin):
-                k = khat[i][j]
-                if k is None or specs[j] is None:
+                k, spec = khat[i][j], specs[j]
+                if k is None or spec is None:
                     continue
                 if not have:
-                    np.multiply(k, specs[j], out=acc)
+                    np.multiply(k, spec, out=acc)
                     have = True
                 else:
-                    np.multiply(k, specs[j], out=self._tmp)
+                    np.multiply(k, spec, out=self._tmp)
                     acc += self._tmp
             if have:
                 self.inverse(acc, out=out[i])
@@ -352,7 +352,7 @@ class Convolver:
         """:meth:`convolve_matrix` on pyFFTW's buffers: each input's spectrum stays in its
         own forward buffer (:meth:`_forward_slot`), and each output's sum of products is
         formed in the inverse plan's input, so no spectrum is copied."""
-        specs = [None] * len(xs)
+        specs: list[np.ndarray | None] = [None] * len(xs)
         n = 0
         for j, x in enumerate(xs):
             if x is not None:
@@ -362,8 +362,8 @@ class Convolver:
         if out is None:
             out = np.zeros((len(khat), self.n1, self.n2))
         for i, row in enumerate(khat):
-            terms = [(k, specs[j]) for j, k in enumerate(row)
-                     if k is not None and specs[j] is not None]
+            terms = [(k, spec) for j, k in enumerate(row)
+                     if k is not None and (spec := specs[j]) is not None]
             if not terms:
                 out[i] = 0.0
                 continue

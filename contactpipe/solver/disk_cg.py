@@ -374,7 +374,7 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure,
     z = np.empty_like(x)
     z[-2:] = con.keep(direction(M, gt[-2:] / unit, curv / (unit * unit), qhat, a_self,
                                 free, turning, tuning) / unit, free)
-    sets = (free, turning)
+    sets: tuple[np.ndarray, ...] = (free, turning)
     entered = bool(released.any())
     if pressure is not None:
         gr[0], work, back, _ = pressure.residual(g[0], x[0])

@@ -502,7 +502,7 @@ class DirectMemory:
         else:
             self.weight = self.weight0
         self.k = 0
-        self._past = []          # increments (linear, step_start) or tractions (bdf2)
+        self._past: list = []    # increments (linear, step_start) or tractions (bdf2)
         self._prev = np.zeros(self.shape)
 
     def _grow(self, count):

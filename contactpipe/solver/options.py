@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 __all__ = ["TUNING", "Tuning", "tuning_from"]
 
@@ -118,7 +119,7 @@ def tuning_from(items) -> Tuning:
     booleans as true/false (or 1/0), numbers as Python floats or integers. Raises
     ValueError naming the field and what is allowed."""
     fields = {f.name: f for f in dataclasses.fields(Tuning)}
-    changes = {}
+    changes: dict[str, Any] = {}            # field name: its new value (bool, int, float)
     for item in items:
         name, sep, text = item.partition("=")
         name = name.strip().replace("-", "_")

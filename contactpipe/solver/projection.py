@@ -122,6 +122,7 @@ class _CellSet:
     def support(self, u):
         ls, hs, rs = self.ls, self.hs, self.rs
         if self.box:
+            assert ls is not None and hs is not None          # set for a box
             v = u @ self.Cs                                   # (k,)
             return float(np.sum(np.maximum(ls * v, np.where(np.isfinite(hs), hs * v,
                                                             np.where(v > 0, np.inf, 0.0)))))
