@@ -8,6 +8,7 @@ import pathlib
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -270,3 +271,20 @@ def test_no_print_in_tests():
             if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "print":
                 found.append(f"{p.name}:{node.lineno}")
     assert not found, found
+
+
+def test_one_on_bound_helper():
+    """Whether a cell is on its friction bound is decided by one helper
+    (solver/projection.py: on_bound, with the margins PROJECTED and RECOGNISED), not by
+    inline copies with their own margins."""
+    import re
+
+    from contactpipe.solver.projection import PROJECTED, RECOGNISED, on_bound
+    copies = re.compile(r"\(1(\.0)? - 1e-(9|12)\)")
+    found = [f"{p.relative_to(ROOT)}:{i}" for p in _sources()
+             for i, line in enumerate(p.read_text().splitlines(), 1) if copies.search(line)]
+    assert not found, found
+    bound = np.array([0.0, 1.0, 1.0, 1.0])
+    mag = np.array([0.0, 1.0 - 0.5 * PROJECTED, 1.0 - 2 * PROJECTED, 1.0 - 0.5 * RECOGNISED])
+    assert on_bound(mag, bound).tolist() == [True, True, False, False]
+    assert on_bound(mag, bound, RECOGNISED).tolist() == [True, True, True, True]

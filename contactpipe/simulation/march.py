@@ -47,6 +47,7 @@ from ..planning import check_resources, estimate_resources
 from ..planning import plan as make_plan
 from ..planning.accuracy import resolve_accuracy
 from ..solver.coupling import FREEDOMS, Previous, solve_instant
+from ..solver.projection import RECOGNISED, on_bound
 from ..solver.state import State
 from ..solver.warm_start import continued_start, self_similar_start
 from ..solver.window import solve_in_window
@@ -56,10 +57,6 @@ from .problem import Problem, grid_coordinates
 
 __all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
            "ResumeNotice", "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
-
-#: A cell sticks while |q| < mu p (1 - STICK_MARGIN) (rounding of the projection).
-STICK_MARGIN = 1e-9
-
 
 class ResumeLockedError(LockedError):
     """Another process is running a resumable run of the same target."""
@@ -163,7 +160,8 @@ def _advance(pb, st, op, sub, U, res):
         if res.dphi3 != 0.0:
             rigid = rigid + res.dphi3 * pb.grid.twist()
         ds = np.where(contact, rigid - du, 0.0)
-        stick = contact & (np.hypot(res.q[0], res.q[1]) < pb.grid.mu * res.p * (1 - STICK_MARGIN))
+        stick = contact & ~on_bound(np.hypot(res.q[0], res.q[1]), pb.grid.mu * res.p,
+                                    RECOGNISED)
         ds[:, stick] = 0.0
         if pb.plan.tangential == "scalar":
             ds[1] = 0.0
@@ -296,7 +294,7 @@ def _record(pb, st, W, T, iterations, passes, pairs) -> dict:
     h = np.where(contact, 0.0, np.maximum(pb.grid.gap + u[2] - omega[2], 0.0))
     status = np.zeros(p.shape, dtype=np.int8)
     if pb.tang:
-        slip = contact & (np.hypot(q[0], q[1]) >= mu * p * (1 - STICK_MARGIN))
+        slip = contact & on_bound(np.hypot(q[0], q[1]), mu * p, RECOGNISED)
         status[contact] = 1
         status[slip] = 2
     else:

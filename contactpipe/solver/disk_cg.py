@@ -65,6 +65,7 @@ import numpy as np
 from .cg import BlockSums, disk_project, project_rows
 from .ledger import Ledger, Move
 from .options import TUNING, Tuning
+from .projection import on_bound
 
 __all__ = ["DiskOptions", "DiskResult", "PressureBlock", "curvature", "curved", "direction",
            "disk_cg", "disk_start", "magnitude", "restore_rows", "shortened", "slip_axes"]
@@ -357,7 +358,7 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure,
     :func:`direction`'s on the shear, the pressure block's own on p."""
     s = x[-2:]
     mag = magnitude(s)
-    at_bound = movable & (mag >= rho * (1.0 - 1e-12))
+    at_bound = movable & on_bound(mag, rho)
     stick = movable & ~at_bound
     if stick.any():
         lam = con.fit(g[-2:], stick)

@@ -47,6 +47,7 @@ from .cg import BlockSums, BoxOptions, Start, box_cg, disk_project, feasible_sta
 from .disk_cg import DiskOptions, PressureBlock, disk_cg, disk_start, restore_rows
 from .ledger import Ledger, Move
 from .options import TUNING
+from .projection import on_bound
 from .tangential import follow_bound, force_rows, multipliers, scalar_multiplier, sliding
 
 __all__ = ["JointResult", "finish", "finish_vector", "solve_joint", "solve_joint_vector"]
@@ -362,7 +363,7 @@ def _final_shear(s, lag, p, con):
     the final one by less than the tolerance, so this moves s by the tolerance's order."""
     s, _ = disk_project(np.where(p > 0, follow_bound(s, lag, p), 0.0), p)
     mag = np.hypot(s[0], s[1])
-    return restore_rows(s, p, con, (p > 0) & (mag < p * (1.0 - 1e-12)))
+    return restore_rows(s, p, con, (p > 0) & ~on_bound(mag, p))
 
 
 def finish_vector(j: JointResult, b12, T, cell_area):

@@ -7,8 +7,22 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["DAMPING", "POLISH", "box_jacobian", "box_project", "disk_jacobian",
-           "disk_project", "project_box_sum", "project_rows"]
+__all__ = ["DAMPING", "POLISH", "PROJECTED", "RECOGNISED", "on_bound", "box_jacobian",
+           "box_project", "disk_jacobian", "disk_project", "project_box_sum", "project_rows"]
+
+#: A cell a projection put on its friction bound |q| = mu p lies within this relative
+#: distance of it (the projection's rounding) [1].
+PROJECTED = 1e-12
+#: A cell read from outside a solve (a warm start's old bound, the archive's stick/slip
+#: status) counts as on its bound within this relative distance [1].
+RECOGNISED = 1e-9
+
+
+def on_bound(mag, bound, margin=PROJECTED):
+    """Cells whose traction magnitude ``mag`` [Pa] is on its bound ``bound`` [Pa] (mu p)
+    within the relative ``margin``: mag >= bound (1 - margin). A cell with a zero bound
+    is on it (mag >= 0); callers that mean contact cells only add ``bound > 0``."""
+    return mag >= bound * (1.0 - margin)
 
 #: Levenberg-Marquardt damping of the dual Newton step of :func:`project_rows`, relative
 #: to the Lipschitz constant of the dual's gradient: from the first value (a plain Newton

@@ -57,6 +57,7 @@ from .cg import cg_with_fallback as _cg_with_fallback
 from .disk_cg import DiskOptions, disk_cg, disk_start
 from .ledger import Ledger
 from .options import TUNING
+from .projection import RECOGNISED, on_bound
 
 __all__ = ["TangentialResult", "follow_bound", "solve_scalar", "solve_vector", "disk_project",
            "project_disks_sum", "force_rows", "sliding", "slip_multipliers"]
@@ -79,25 +80,21 @@ def force_rows(shape, T, cell_area) -> Constraints:
     return ComponentSums(np.asarray(T, dtype=float) / cell_area, shape)
 
 
-#: A warm start's cell counts as on its bound within this relative distance [1].
-ON_BOUND = 1e-9
-
-
 def follow_bound(q, old, new):
     """The warm start of a tangential solve whose bound moved from ``old`` to ``new``
-    [Pa]: the cells on their old bound (within :data:`ON_BOUND`) stay on it, scaled with
+    [Pa]: the cells on their old bound (within :data:`RECOGNISED`) stay on it, scaled with
     it; the others as they were. ``q`` is (2, N1, N2), or (N1, N2) for one component.
 
     A slip cell lands on the new bound as exactly as rounding allows, and with one
     component (q2 = 0) on ±new itself: a ratio new/old rounds about half of them just
     inside, where the CG would take them for stick cells."""
     if q.ndim == 2:
-        slip = (old > 0) & (np.abs(q) >= old * (1.0 - ON_BOUND))
+        slip = (old > 0) & on_bound(np.abs(q), old, RECOGNISED)
         return np.where(slip, np.copysign(new, q), q)
     if not q[1].any():
         return np.stack([follow_bound(q[0], old, new), q[1]])
     mag = np.hypot(q[0], q[1])
-    slip = (old > 0) & (mag >= old * (1.0 - ON_BOUND))
+    slip = (old > 0) & on_bound(mag, old, RECOGNISED)
     return q * np.where(slip, new / np.where(mag > 0, mag, 1.0), 1.0)
 
 
@@ -105,7 +102,7 @@ def scalar_multiplier(g, q1, bound) -> float:
     """Δω1 [m], the force row's multiplier of a one-component solution ``q1`` [Pa] under
     the bound μp [Pa], g = K11 q1 + b1 [m]: fitted to the stick cells, or where no cell
     sticks clearly, to the slip directions (:func:`slip_multipliers`)."""
-    stick = (bound > 0) & (np.abs(q1) < bound * (1.0 - 1e-12))
+    stick = (bound > 0) & ~on_bound(np.abs(q1), bound)
     if _pinned(stick, np.abs(q1), bound):
         return float(_multiplier(g[None], stick)[0])
     return float(slip_multipliers(g, q1, bound, None)[0])
@@ -245,7 +242,7 @@ def multipliers(con, g, q, bound):
     """The rows' multipliers of a vector solution: fitted to the stick cells, or where
     no cell sticks, to the slip directions (:func:`slip_multipliers`)."""
     mag = np.hypot(q[0], q[1])
-    stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
+    stick = (bound > 0) & ~on_bound(mag, bound)
     if con.m == 0:
         return np.zeros(0)
     if _pinned(stick, mag, bound):
@@ -269,7 +266,7 @@ def sliding(q, bound) -> bool:
     while some are in contact: the contact slides (nearly) as a whole, where the vector
     CG stalls and the projected gradient converges (:func:`_cg_with_fallback`)."""
     mag = np.hypot(q[0], q[1])
-    stick = (bound > 0) & (mag < bound * (1.0 - 1e-12))
+    stick = (bound > 0) & ~on_bound(mag, bound)
     return bool((bound > 0).any()) and not _pinned(stick, mag, bound)
 
 
