@@ -13,6 +13,7 @@ must give the answer of the path it replaces to within the tolerance.
 FFT pairs and times are benchmark figures (``contactpipe bench fretting paper-fig3``),
 not asserted here.
 """
+import functools
 from dataclasses import replace
 
 import numpy as np
@@ -235,6 +236,15 @@ def test_self_similar_start_of_the_preload():
     assert np.abs(as_it_was - target).sum() > 0.9 * target.sum()
 
 
+@functools.cache
+def _continued(form):
+    """Steel on aluminium fretting, 32², 20 steps, each instant started as it is and
+    with the continued starts off."""
+    return (cp.simulate(steel_on_aluminium(), tangential=form),
+            cp.simulate(steel_on_aluminium(), tangential=form,
+                        tuning=replace(TUNING, continued_starts=False)))
+
+
 @pytest.mark.parametrize("form", ["scalar", "vector"])
 def test_tractions_continued_along_a_straight_load_path(form):
     """Steel on aluminium fretting, 32², 20 steps: starting each instant of a straight
@@ -242,11 +252,16 @@ def test_tractions_continued_along_a_straight_load_path(form):
     continued alike, gives the instants of the plain start within 1e-7 of p0 and μp0
     (measured 2.4e-11 / 1.6e-9 scalar, 5.7e-11 / 3.2e-9 vector) for fewer FFT pairs
     after the first instant (measured 1 157 against 1 182 scalar, 1 984 against 2 145
-    vector; at 128² and 40 steps 61.6 against 67.2 and 130.5 against 142.7 a step)."""
-    fast = cp.simulate(steel_on_aluminium(), tangential=form)
-    slow = cp.simulate(steel_on_aluminium(), tangential=form,
-                       tuning=replace(TUNING, continued_starts=False))
+    vector; at 128² and 40 steps 61.6 against 67.2 and 130.5 against 142.7 a step; the
+    pairs: :func:`test_continued_starts_save_fft_pairs`)."""
+    fast, slow = _continued(form)
     assert_same(fast, slow, 1e-7, 1e-7)
+
+
+@pytest.mark.bench
+@pytest.mark.parametrize("form", ["scalar", "vector"])
+def test_continued_starts_save_fft_pairs(form):
+    fast, slow = _continued(form)
     assert fast.fft_pairs.values[1:].sum() < slow.fft_pairs.values[1:].sum()
 
 
@@ -477,16 +492,11 @@ def test_joint_vector_solve_folds_its_corrections_into_its_steps():
     np.testing.assert_array_equal(j.bound, MU * j.p)     # on its own pressure's bound
 
 
-def test_scalar_joint_steps_fold_their_projection_products():
-    """The scalar joint solve's box_cg applies its operator in halves (a
-    :class:`BlockOperator`): a projection's correction rides on the step's inverse
-    transforms, and so does the next pass's start (``follow``). Against whole products (a
-    plain callable; steel on aluminium, 32², T = 0.5 μW, tolerance 1e-10) it reaches the
-    same (p, q1) (measured 1.8e-14 and 1.1e-14 of p's largest and μ times it; bound 1e-9)
-    in as many iterations (18, 5 passes), for fewer FFT pairs (measured 52 against 60),
-    and spends two inverse transforms per iteration and two for its first A x: the final
-    state, q1 on its own pressure's bound, rides on the last step too, and A x is the
-    product of that (p, q1) to 1e-13 of its largest."""
+@functools.cache
+def _halves_and_whole():
+    """The scalar joint solve of steel on aluminium (32², T = 0.5 μW, tolerance 1e-10)
+    with its operator applied in halves and whole: (halves, its pairs, its inverse
+    transforms, the exact A x of its (p, q1), whole, its pairs)."""
     from test_coupling import ALUMINIUM as AL
     from test_coupling import STEEL, W, instant
 
@@ -503,14 +513,34 @@ def test_scalar_joint_steps_fold_their_projection_products():
         return j, op.conv.pairs, op.conv.inverse_count
 
     halves, halves_pairs, inverse = run()
+    exact_Ax = op.conv.convolve_matrix([[op.k["33"], op.k["31"]], [op.k["13"], op.k["11"]]],
+                                       [halves.p, halves.q])
+    whole, whole_pairs, _ = run(replace(TUNING, halves=False))
+    return halves, halves_pairs, inverse, exact_Ax, whole, whole_pairs
+
+
+def test_scalar_joint_steps_fold_their_projection_products():
+    """The scalar joint solve's box_cg applies its operator in halves (a
+    :class:`BlockOperator`): a projection's correction rides on the step's inverse
+    transforms, and so does the next pass's start (``follow``). Against whole products (a
+    plain callable; steel on aluminium, 32², T = 0.5 μW, tolerance 1e-10) it reaches the
+    same (p, q1) (measured 1.8e-14 and 1.1e-14 of p's largest and μ times it; bound 1e-9)
+    in as many iterations (18, 5 passes), for fewer FFT pairs (measured 52 against 60),
+    and spends two inverse transforms per iteration and two for its first A x: the final
+    state, q1 on its own pressure's bound, rides on the last step too, and A x is the
+    product of that (p, q1) to 1e-13 of its largest."""
+    halves, _, inverse, exact, whole, _ = _halves_and_whole()
     assert inverse == 2 * (halves.iterations + 1)
     np.testing.assert_array_equal(halves.bound, MU * halves.p)   # its own pressure's bound
-    k = op.k
-    exact = op.conv.convolve_matrix([[k["33"], k["31"]], [k["13"], k["11"]]],
-                                    [halves.p, halves.q])
     assert np.abs(halves.Ax - exact).max() <= 1e-13 * np.abs(exact).max()
-    whole, whole_pairs, _ = run(replace(TUNING, halves=False))
     assert halves.iterations == whole.iterations
     assert np.abs(halves.p - whole.p).max() <= 1e-9 * whole.p.max()
     assert np.abs(halves.q - whole.q).max() <= 1e-9 * MU * whole.p.max()
+
+
+@pytest.mark.bench
+def test_scalar_joint_steps_in_halves_save_fft_pairs():
+    """The same two solves' FFT pairs: in halves fewer than whole (measured 52 against
+    60)."""
+    _, halves_pairs, _, _, _, whole_pairs = _halves_and_whole()
     assert halves_pairs < whole_pairs
