@@ -127,8 +127,9 @@ def _command(argv) -> str | None:
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The whole command line; with ``command``, only that stage's module is imported
-    (the others get their one-line help): each stage module imports what it draws or
-    computes with (xarray, dask, matplotlib), which a refused scene never needs."""
+    (the others get their one-line help; ``""``: none is): each stage module imports what
+    it draws or computes with (xarray, dask, matplotlib), which a refused scene or the
+    top-level help never needs."""
     parser = argparse.ArgumentParser(
         prog="contactpipe",
         description="Frictional stick-slip contact of elastic and viscoelastic bodies.")
@@ -174,7 +175,8 @@ def _error(err, code: int, with_type: bool = False) -> int:
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    parser = build_parser(_command(argv))
+    # no sub-command named (``contactpipe --help``): no stage module is imported at all
+    parser = build_parser(_command(argv) or "")
     args = parser.parse_args(argv)
     if getattr(args, "func", None) is None:
         parser.print_help(sys.stderr)
