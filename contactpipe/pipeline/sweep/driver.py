@@ -134,8 +134,6 @@ import time
 from ..._util.files import TEMP_SUFFIX, LockedError, check_output_dir, exclusive_lock, make_folder
 from ...archive import open_archive
 from ...exceptions import ArchiveError, SceneError, one_line
-from ...planning import check_time, estimate_resources
-from ...planning.accuracy import resolve_accuracy
 from ...scene import Scene
 from ..inputs import scene_digest
 from .combine import open_member, open_sweep
@@ -339,6 +337,10 @@ def _check_run_times(members):
     """Every member estimated to take longer than its ``solver.max_hours`` is refused
     before any work (:func:`contactpipe.planning.check_time`; the memory is the worker's,
     checked where it runs)."""
+    # planning pulls the solver (and pyfftw) in: imported by the sweep that runs, not by
+    # every reader of the sweep package (open_sweep, the figures)
+    from ...planning import check_time, estimate_resources
+    from ...planning.accuracy import resolve_accuracy
     problems = []
     for m in members:
         try:
