@@ -334,24 +334,34 @@ def test_run_with_a_friction_map_in_units(work, tmp_path, capsys, units, code):
 
 # ---------------------------------------------------------------- 21: start-up
 
+#: Printed last by the code :func:`_in_a_fresh_process` runs: the top-level packages
+#: outside the standard library that it loaded.
+_THIRD_PARTY = ("print(sorted({m.split('.')[0] for m in sys.modules if not m.startswith('_')}\n"
+                "             - set(sys.stdlib_module_names)))\n")
+
+
+def _in_a_fresh_process(code):
+    """Run ``code`` (then :data:`_THIRD_PARTY`) in a new interpreter on this tree: its
+    stdout lines and its stderr."""
+    r = subprocess.run([sys.executable, "-c", code + _THIRD_PARTY], capture_output=True,
+                       text=True, cwd=ROOT, timeout=120,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    return r.stdout.split("\n"), r.stderr
+
+
 def test_the_validation_path_imports_no_heavy_library(tmp_path):
     """A refused scene is refused without importing dask, distributed, matplotlib,
     xarray, netCDF4 or pyfftw (those took about 1.2 s of the 1.3 s import before): of
     the packages outside the standard library, only numpy is loaded."""
     scene = tmp_path / "bad.toml"
     scene.write_text('[grid]\npoints = "x"\n')
-    code = ("import sys\nfrom contactpipe.pipeline import cli\n"
-            f"code = cli.main(['run', {str(scene)!r}, '-o', {str(tmp_path / 'x.nc')!r}])\n"
-            "heavy = ('dask', 'distributed', 'matplotlib', 'xarray', 'netCDF4', 'pyfftw')\n"
-            "print(code, sorted(m for m in sys.modules if m.split('.')[0] in heavy))\n"
-            "print(sorted({m.split('.')[0] for m in sys.modules if not m.startswith('_')}\n"
-            "             - set(sys.stdlib_module_names)))\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       cwd=ROOT, timeout=120,
-                       env={**os.environ, "PYTHONPATH": str(ROOT)})
-    assert r.stdout.split("\n")[:2] == ["2 []", "['contactpipe', 'numpy']"], \
-        r.stdout + r.stderr[-2000:]
-    assert r.stderr.count("\n") == 1 and "grid.points" in r.stderr
+    out, err = _in_a_fresh_process(
+        "import sys\nfrom contactpipe.pipeline import cli\n"
+        f"code = cli.main(['run', {str(scene)!r}, '-o', {str(tmp_path / 'x.nc')!r}])\n"
+        "heavy = ('dask', 'distributed', 'matplotlib', 'xarray', 'netCDF4', 'pyfftw')\n"
+        "print(code, sorted(m for m in sys.modules if m.split('.')[0] in heavy))\n")
+    assert out[:2] == ["2 []", "['contactpipe', 'numpy']"], "\n".join(out) + err[-2000:]
+    assert err.count("\n") == 1 and "grid.points" in err
 
 
 def test_the_top_level_help_imports_no_stage():
@@ -359,21 +369,16 @@ def test_the_top_level_help_imports_no_stage():
     any stage module (it imported all of them, the sweep driver pulling the solver and
     pyfftw: 1.2-1.5 s, now 0.08-0.09 s): no package outside the standard library is
     loaded but contactpipe itself."""
-    code = ("import sys, contextlib, io\nfrom contactpipe.pipeline import cli\n"
-            "out = io.StringIO()\n"
-            "with contextlib.redirect_stdout(out):\n"
-            "    try:\n        cli.main(['--help'])\n    except SystemExit as e:\n"
-            "        code = e.code\n"
-            "stages = sorted(m for m in sys.modules if m.startswith('contactpipe.pipeline.')\n"
-            "                and m.split('.')[2] in ('sweep', 'compare', 'figures'))\n"
-            "print(code, 'sweep' in out.getvalue(), stages)\n"
-            "print(sorted({m.split('.')[0] for m in sys.modules if not m.startswith('_')}\n"
-            "             - set(sys.stdlib_module_names)))\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       cwd=ROOT, timeout=120,
-                       env={**os.environ, "PYTHONPATH": str(ROOT)})
-    assert r.stdout.split("\n")[:2] == ["0 True []", "['contactpipe']"], \
-        r.stdout + r.stderr[-2000:]
+    out, err = _in_a_fresh_process(
+        "import sys, contextlib, io\nfrom contactpipe.pipeline import cli\n"
+        "text = io.StringIO()\n"
+        "with contextlib.redirect_stdout(text):\n"
+        "    try:\n        cli.main(['--help'])\n    except SystemExit as e:\n"
+        "        code = e.code\n"
+        "stages = sorted(m for m in sys.modules if m.startswith('contactpipe.pipeline.')\n"
+        "                and m.split('.')[2] in ('sweep', 'compare', 'figures'))\n"
+        "print(code, 'sweep' in text.getvalue(), stages)\n")
+    assert out[:2] == ["0 True []", "['contactpipe']"], "\n".join(out) + err[-2000:]
 
 
 def test_public_names_load_on_first_use():
