@@ -9,9 +9,6 @@ import warnings
 
 #: Release that removes the old paths.
 REMOVED_IN = "0.2"
-#: Modules of the package still importing an old path, pending their own refactor: no
-#: warning for them (a user cannot act on it).
-PENDING: set[str] = set()
 
 
 _PACKAGE_INIT = __file__.rsplit("_util", 1)[0] + "__init__.py"
@@ -20,8 +17,7 @@ _PACKAGE_INIT = __file__.rsplit("_util", 1)[0] + "__init__.py"
 def _importer():
     """The stack level of the code that imported the old path, as ``warnings.warn``
     counts it from :func:`alias` (the import system's frames skipped, and
-    ``contactpipe.__getattr__``, which imports on behalf of ``cp.<name>``), and that
-    code's module name."""
+    ``contactpipe.__getattr__``, which imports on behalf of ``cp.<name>``)."""
     frame, level = sys._getframe(2), 2                  # the old path's module
     frame = frame.f_back
     while frame is not None:
@@ -29,16 +25,14 @@ def _importer():
         if not ("importlib" in name and "_bootstrap" in name):   # warnings skips those
             level += 1
             if "importlib" not in name and name != _PACKAGE_INIT:
-                return level, frame.f_globals.get("__name__", "")
+                return level
         frame = frame.f_back
-    return level, ""
+    return level
 
 
 def alias(old: str, new: str) -> None:
     """Make ``old`` an alias of module ``new``, with a DeprecationWarning that points at
     the importer's line."""
-    level, importer = _importer()
-    if importer not in PENDING:
-        warnings.warn(f"{old} has moved to {new}; import it from there (the old path "
-                      f"goes in {REMOVED_IN})", DeprecationWarning, stacklevel=level)
+    warnings.warn(f"{old} has moved to {new}; import it from there (the old path goes in "
+                  f"{REMOVED_IN})", DeprecationWarning, stacklevel=_importer())
     sys.modules[old] = importlib.import_module(new)
