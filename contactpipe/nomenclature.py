@@ -33,13 +33,21 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FIELD", "SERIES", "MAP", "MAPS", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS",
+__all__ = ["FIELD", "SERIES", "MAP", "CYCLE_FIELD", "CYCLE_SERIES", "LOOP_FIELD", "WEAR",
+           "MAPS", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS",
            "REQUIRED_ATTRS", "CONVENTIONS", "TANGENTIAL", "STATUS_SEPARATED", "STATUS_STICK",
            "STATUS_SLIP", "cf_attrs", "variables_for"]
 
 FIELD = ("time", "x1", "x2")
 SERIES = ("time",)
 MAP = ("x1", "x2")
+#: A wear run's history: a map per record (completed cycles), a number per record, and
+#: the loop of tractions of a kept cycle (every instant of that cycle).
+CYCLE_FIELD = ("cycle", "x1", "x2")
+CYCLE_SERIES = ("cycle",)
+LOOP_FIELD = ("loop_cycle", "loop_time", "x1", "x2")
+#: The ``model`` of the variables a wear run writes.
+WEAR = "wear"
 
 CONVENTIONS = "CF-1.10"
 
@@ -101,6 +109,22 @@ VARIABLES: dict[str, dict] = {
                           model=TANGENTIAL, diagnostic=True),
     "fft_pairs": _v(SERIES, "1", "forward+inverse padded FFT pairs spent on that step",
                     dtype="int32", diagnostic=True),
+    # the history of a wear run, over the completed cycles of each record
+    "wear_depth": _v(CYCLE_FIELD, "m", "depth removed since the start, both bodies together",
+                     model=WEAR),
+    "worn_volume": _v(CYCLE_SERIES, "m3", "worn volume, sum of wear_depth dA", model=WEAR),
+    "cumulative_dissipation": _v(CYCLE_SERIES, "J", "frictional energy dissipated from the "
+                                 "start to the end of that cycle, extrapolated cycles "
+                                 "included", model=WEAR),
+    "cycle_p_max": _v(CYCLE_SERIES, "Pa", "largest pressure in that cycle", model=WEAR),
+    "cycle_stick_area": _v(CYCLE_SERIES, "m2", "smallest stick area in that cycle",
+                           model=WEAR),
+    # the loops of tractions a wear run keeps (wear.keep_tractions)
+    "loop_p": _v(LOOP_FIELD, "Pa", "contact pressure through a kept cycle", model=WEAR),
+    "loop_q1": _v(LOOP_FIELD, "Pa", "shear traction along x1 through a kept cycle",
+                  model=WEAR),
+    "loop_q2": _v(LOOP_FIELD, "Pa", "shear traction along x2 through a kept cycle",
+                  model=WEAR),
 }
 
 #: Maps over (x1, x2), written once (not per instant) when the scene has them. Kept apart
@@ -115,6 +139,9 @@ COORDINATES: dict[str, dict] = {
     "x1": {"units": "m", "long_name": "cell centre along x1"},
     "x2": {"units": "m", "long_name": "cell centre along x2"},
     "t_norm": {"units": "1", "long_name": "dimensionless time (t - t0)/window"},
+    "cycle": {"units": "1", "long_name": "cycles of the load program completed"},
+    "loop_cycle": {"units": "1", "long_name": "cycles completed at a kept loop's end"},
+    "loop_time": {"units": "s", "long_name": "time since the kept cycle's start"},
 }
 
 # Global attributes of every archive (docs/archive.md) and their meaning.

@@ -582,13 +582,16 @@ def _encoding(ds: xr.Dataset, prec, compress: bool) -> dict:
             entry = VARIABLES.get(name) or MAPS[name]
             enc["dtype"] = (prec or v.dtype) if entry["dtype"] == "float" \
                 else np.dtype(entry["dtype"])
-            if entry["dims"] == FIELD:
-                enc["chunksizes"] = (1, ds.sizes["x1"], ds.sizes["x2"])
+            dims = entry["dims"]
+            if dims == MAP:
                 enc.update(zip_)
-            elif entry["dims"] == MAP:
+            elif dims[-2:] == MAP:           # a field over time, or over a wear run's cycles
+                enc["chunksizes"] = (1,) * (len(dims) - 2) + (ds.sizes["x1"], ds.sizes["x2"])
                 enc.update(zip_)
-            else:
+            elif dims == ("time",):
                 enc.update(chunksizes=(SERIES_CHUNK,), zlib=False)
+            else:
+                enc.update(zlib=False)
         elif name == "time":
             enc["chunksizes"] = (SERIES_CHUNK,)
         encoding[name] = enc

@@ -20,6 +20,7 @@ from .model import (
                     Scene,
                     Solver,
                     TimeMesh,
+                    Wear,
                     auto_grid_size,
                     contact_reach,
                     contact_shifts,
@@ -27,5 +28,5 @@ from .model import (
 )
 
 __all__ = ["Scene", "Geometry", "BodySpec", "Friction", "Load", "Fretting", "Grid",
-           "TimeMesh", "Solver", "Output", "SceneError", "hertz_semi_axes", "contact_reach",
+           "TimeMesh", "Solver", "Output", "Wear", "SceneError", "hertz_semi_axes", "contact_reach",
            "contact_shifts", "auto_grid_size", "AUTO_MARGIN", "AUTO_PUNCH_FACTOR"]

@@ -64,9 +64,11 @@ from .reach import (
     hertz_semi_axes,
 )
 from .tables import Field, Reader, show
+from .wear import Wear, check_wear
 
 __all__ = ["Scene", "Geometry", "BodySpec", "Friction", "Load", "Fretting", "Grid",
-           "TimeMesh", "Solver", "Output", "SceneError", "hertz_semi_axes", "contact_reach",
+           "TimeMesh", "Solver", "Output", "Wear", "SceneError", "hertz_semi_axes",
+           "contact_reach",
            "contact_shifts", "auto_grid_size", "AUTO_MARGIN", "AUTO_PUNCH_FACTOR"]
 
 
@@ -86,6 +88,7 @@ FIELDS = (
     Field("time", "table", "steps", part=TimeMesh, default=TimeMesh()),
     Field("solver", "table", "solver options", part=Solver, default=Solver()),
     Field("output", "table", "stride, precision, compress", part=Output, default=Output()),
+    Field("wear", "table", "law, coefficient [1/Pa], cycles, jump", part=Wear),
 )
 PARTS = tuple(f.name for f in FIELDS[1:])
 TOP_KEYS = tuple(f.name for f in FIELDS)
@@ -114,6 +117,9 @@ class Scene:
     friction, time, solver, output : dict or part, optional
         Absent: defaults (mu = 0; the least uniform mesh that holds every load knot;
         solver and output defaults).
+    wear : dict or Wear, optional
+        Fretting wear over many repetitions of the load program (docs/wear.md); absent:
+        no wear, one pass of the program.
     """
 
     name: str
@@ -126,18 +132,20 @@ class Scene:
     time: TimeMesh
     solver: Solver
     output: Output
+    wear: Wear | None
 
     def __init__(self, /, name="scene", geometry=None, indenter=None, halfspace=None,
                  friction=None, load=None, grid=None, time=None, solver=None, output=None,
-                 **unknown):
+                 wear=None, **unknown):
         given = dict(name=name, geometry=geometry, indenter=indenter, halfspace=halfspace,
                      friction=friction, load=load, grid=grid, time=time, solver=solver,
-                     output=output, **unknown)
+                     output=output, wear=wear, **unknown)
         problems: list[str] = []
         r = Reader(given, "", problems, title="the scene")
         r.check_keys(FIELDS)
         parts = r.read(FIELDS)
         parts["time"] = check_scene(parts, problems)
+        check_wear(parts, problems)
         if problems:
             raise SceneError(problems)
         for key in TOP_KEYS:
@@ -195,7 +203,9 @@ class Scene:
         ``solver.accuracy``) are left out, as TOML has no null."""
         d = {"name": self.name}
         for key in PARTS:
-            d[key] = getattr(self, key).to_dict()
+            part = getattr(self, key)
+            if part is not None:        # an optional table absent ([wear])
+                d[key] = part.to_dict()
         return d
 
     def to_toml(self) -> str:

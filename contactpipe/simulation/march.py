@@ -52,6 +52,7 @@ from ..solver.state import State
 from ..solver.warm_start import continued_start, self_similar_start
 from ..solver.window import solve_in_window
 from . import preload
+from .cycles import run_cycles
 from .preload import Path
 from .problem import Problem, grid_coordinates
 
@@ -78,7 +79,8 @@ def _step(pb: Problem, st: State, k: int, path: Path) -> dict:
     T = np.array([pb.T1[k], pb.T2[k]])
     # the normal problem is unchanged from the previous instant: reuse its solution
     same_normal = (not first and pb.plan.coupling == "none" and pb.plan.memory == "none"
-                   and _same_normal(pb.program, k) and st.normal is not None)
+                   and _same_normal(pb.program, k) and st.normal is not None
+                   and pb.wear is None)         # wear moves the gap at every step
     iterations, passes, f_last = 0, 0, 0.0
     q_before, p_before, c = st.q, st.p, pb.program.continuation(k)
     fractions = pb.fractions(first, _drive(pb.program, k), path.substeps)
@@ -167,6 +169,8 @@ def _advance(pb, st, op, sub, U, res):
             ds[1] = 0.0
         st.s = st.s + ds
         st.dissipation += float(np.sum(res.q * ds)) * pb.grid.cell
+        if pb.wear is not None:         # the worn depth opens the gap (simulation.wear)
+            pb.grid.gap = pb.wear.take(res.p, res.q, ds)
         st.omega[:2] += res.domega
         st.phi[2] += res.dphi3
     st.p, st.q, st.u = res.p, res.q, res.u
@@ -529,15 +533,25 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
         return _run(Problem(scene, pl, fft, threads, tuning), path, resume, opts)
 
 
+def _start_record(pb, st) -> dict:
+    """The record of the state ``st`` as it stands (a wear cycle's start)."""
+    return _record(pb, st, pb.W[0], None, 0, 0, 0)
+
+
 def _run(pb, path, resume, opts):
-    """March ``pb`` in memory (``path`` None), into a new archive, or resumably."""
+    """March ``pb`` in memory (``path`` None), into a new archive, or resumably; a wear
+    run repeats the program (:mod:`.cycles`), written whole at its end."""
     if path is None:
+        if pb.wear is not None:
+            return run_cycles(pb, None, _step, _start_record, opts)
         return _march(pb, None, None, *opts)
     try:
         make_folder(path.parent)
     except OSError as e:
         raise OutputPathError(f"archive {path}: cannot create its folder "
                               f"({e.strerror or one_line(e)})") from None
+    if pb.wear is not None:
+        return run_cycles(pb, path, _step, _start_record, opts)
     if not resume:
         return open_archive(_march(pb, path, None, *opts))
     lock = resume_lock(path)

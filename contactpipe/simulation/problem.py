@@ -29,6 +29,7 @@ from ..solver.operator import (
     history_displacement,
     history_kernels,
 )
+from .wear import WearTracker
 
 __all__ = ["Grid", "Operators", "Problem", "grid_coordinates"]
 
@@ -177,6 +178,9 @@ class Problem:
         self.ops = Operators(bodies, self.grid, pl, self.dt, self.t.size,
                              fft or sv.fft, threads or sv.threads)
         self._check_finite()
+        #: the worn surface of a wear run (:mod:`.wear`), None without ``[wear]``
+        self.wear = None if getattr(scene, "wear", None) is None else \
+            WearTracker(scene.wear, self.grid.gap)
 
     def _check_finite(self):
         """Refuse constants whose influence coefficients float64 cannot hold, or whose

@@ -1,0 +1,282 @@
+"""A wear run: the load program repeated ``wear.cycles`` times on the wearing surface, with
+cycle jumps (docs/wear.md).
+
+The program is one cycle that ends where it starts. The first cycle runs every instant
+from t0 (the normal preload included); each later one runs instants 1 .. steps again from
+the state the last one left: the stick/slip state, the slip, the creep memory and the
+rigid motions carry over, nothing restarts. The worn depth (:mod:`.wear`) opens the gap
+after every step.
+
+A simulated cycle stands for ``J`` cycles (the jump): its wear increment, its dissipation
+and its slip are extrapolated over the ``J − 1`` cycles that follow, and the creep memory
+is advanced as the same periodic load would leave it (:func:`.wear.advance_memories`).
+The last cycle is always simulated. ``jump = "auto"`` chooses J from the change of the
+wear increment between the last two simulated cycles (:class:`Jumps`).
+
+The archive holds the instants of the last cycle (over ``time``, absolute from t0) and the
+history at the records (over ``cycle``): every simulated cycle when jumps are taken,
+log-spaced cycles when every cycle is simulated, the first and the last always.
+"""
+from __future__ import annotations
+
+import math
+import time as _time
+
+import numpy as np
+import xarray as xr
+
+from ..archive import MemoryWriter, open_archive, save, validate
+from ..exceptions import ArchiveError
+from ..nomenclature import (
+    CYCLE_FIELD,
+    CYCLE_SERIES,
+    LOOP_FIELD,
+    cf_attrs,
+    variables_for,
+)
+from . import preload
+from .preload import Path
+from .wear import advance_memories, memory_snapshot
+
+__all__ = ["run_cycles", "Jumps", "record_cycles", "RECORDS"]
+
+#: Records of a run that simulates every cycle: about this many, log-spaced.
+RECORDS = 100
+
+
+class Jumps:
+    """The jump J (cycles per simulated cycle): fixed, or chosen from an error estimate.
+
+    With ``jump = "auto"`` the wear increment per cycle r is compared between the last two
+    simulated cycles, G cycles apart: ρ = (r − r_prev)/G is its change per cycle, and
+    holding r over the next J cycles errs by about ρ J²/2, a fraction |ρ| J / (2|r|) of
+    the J r the jump adds (L2 norms over the grid). J is the largest that keeps that
+    fraction within ``tolerance``, at most twice the last jump; 1 until two cycles are
+    known.
+    """
+
+    def __init__(self, jump, tolerance: float):
+        self.fixed = None if jump == "auto" else int(jump)
+        self.tol = float(tolerance)
+        self.size = 1
+        self._rate = None
+
+    def choose(self, rate: np.ndarray) -> int:
+        """The next jump, after a simulated cycle whose wear increment is ``rate`` [m]."""
+        if self.fixed is not None:
+            return self.fixed
+        prev, self._rate = self._rate, np.array(rate, copy=True)
+        if prev is None:
+            return 1
+        base = float(np.linalg.norm(rate))
+        change = float(np.linalg.norm(rate - prev)) / self.size
+        if base == 0.0 or change == 0.0:
+            size = 2 * self.size
+        else:
+            size = min(2 * self.size, int(2.0 * self.tol * base / change))
+        self.size = max(1, size)
+        return self.size
+
+
+def record_cycles(total: int, every: bool) -> set | None:
+    """The cycles recorded when every cycle is simulated: about :data:`RECORDS`
+    log-spaced, the first and the last included; None (every simulated cycle) when
+    ``every`` is False (jumps are taken)."""
+    if not every:
+        return None
+    marks = np.round(np.logspace(0.0, math.log10(total), min(total, RECORDS)))
+    return {int(c) for c in marks} | {1, total}
+
+
+def _kept_loops(total: int, count: int) -> list:
+    """The cycles whose loop of tractions is kept: ``count`` log-spaced targets."""
+    if count <= 0:
+        return []
+    marks = np.round(np.logspace(0.0, math.log10(total), count)).astype(int)
+    return sorted({int(c) for c in marks} | {total})
+
+
+class _History:
+    """The records over ``cycle`` and the kept loops over ``loop_cycle``."""
+
+    def __init__(self, pb, targets):
+        self.cell = pb.grid.cell
+        self.rows: dict[str, list] = {k: [] for k in (
+            "cycle", "wear_depth", "worn_volume", "cumulative_dissipation", "cycle_p_max",
+            "cycle_stick_area")}
+        self.targets = list(targets)
+        self.loops: dict[str, list] = {"loop_cycle": [], "loop_p": [], "loop_q1": [],
+                                       "loop_q2": []}
+
+    def keeps(self, cycle: int) -> bool:
+        """Keep this cycle's loop: it reaches the next target (the last cycle always)."""
+        return bool(self.targets) and cycle >= self.targets[0]
+
+    def keep(self, cycle, loop):
+        while self.targets and self.targets[0] <= cycle:
+            self.targets.pop(0)
+        self.loops["loop_cycle"].append(cycle)
+        for name in ("p", "q1", "q2"):
+            self.loops["loop_" + name].append(np.stack([rec[name] for rec in loop]))
+
+    def add(self, cycle, depth, dissipation, p_max, stick_min):
+        depth = np.maximum(depth, 0.0)
+        for key, v in (("cycle", cycle), ("wear_depth", depth.copy()),
+                       ("worn_volume", float(depth.sum()) * self.cell),
+                       ("cumulative_dissipation", dissipation), ("cycle_p_max", p_max),
+                       ("cycle_stick_area", stick_min)):
+            self.rows[key].append(v)
+
+    def variables(self, loop_time) -> dict:
+        """The history as labelled variables, and the kept loops with their coordinates."""
+        out = {"cycle": xr.Variable(("cycle",), np.array(self.rows["cycle"], dtype=np.int64),
+                                    attrs=cf_attrs("cycle"))}
+        for name, rows in self.rows.items():
+            if name != "cycle":
+                dims = CYCLE_FIELD if np.ndim(rows[0]) == 2 else CYCLE_SERIES
+                out[name] = xr.Variable(dims, np.array(rows, dtype=float),
+                                        attrs=cf_attrs(name))
+        if self.loops["loop_cycle"]:
+            out["loop_cycle"] = xr.Variable(("loop_cycle",), np.array(
+                self.loops["loop_cycle"], dtype=np.int64), attrs=cf_attrs("loop_cycle"))
+            out["loop_time"] = xr.Variable(("loop_time",), np.asarray(loop_time, dtype=float),
+                                           attrs=cf_attrs("loop_time"))
+            for name in ("loop_p", "loop_q1", "loop_q2"):
+                out[name] = xr.Variable(LOOP_FIELD, np.array(self.loops[name], dtype=float),
+                                        attrs=cf_attrs(name))
+        return out
+
+
+def _cycle(pb, st, step, record_of, cycle, first, *, keep, on_step):
+    """Simulate cycle ``cycle`` (1-based) from ``st``: its largest pressure, its least
+    stick area, and (``keep``) the records of its instants, its start included."""
+    period = float(pb.t[-1] - pb.t[0])
+    shift = (cycle - 1) * period
+    if cycle == 1:
+        ks, records = range(0, pb.t.size), []
+    else:
+        ks = range(1, pb.t.size)
+        start = record_of(pb, st)
+        records = [start] if keep else []
+    p_max, stick_min = 0.0, math.inf
+    for k in ks:
+        rec = step(pb, st, k, first)
+        p_max = max(p_max, float(np.max(rec["p"])))
+        stick_min = min(stick_min, float(rec.get("stick_area", 0.0)))
+        if keep:
+            records.append(rec)
+        if on_step is not None:
+            on_step(k, float(pb.t[k]) + shift, rec)
+    if cycle > 1:
+        p_max = max(p_max, float(np.max(start["p"])))
+        stick_min = min(stick_min, float(start.get("stick_area", 0.0)))
+    return p_max, stick_min, records
+
+
+def _extrapolate(pb, st, before, more):
+    """Carry the simulated cycle (from the state ``before``) over ``more`` cycles: its
+    wear, dissipation and slip increments added ``more`` times, the memory advanced."""
+    if more <= 0:
+        return
+    wear = pb.wear
+    wear.depth = wear.depth + more * (wear.depth - before["depth"])
+    st.dissipation += more * (st.dissipation - before["dissipation"])
+    st.s = st.s + more * (st.s - before["s"])
+    advance_memories(st.memories, before["memories"], more, float(pb.t[-1] - pb.t[0]))
+    pb.grid.gap = wear.gap()
+
+
+def _progress(pb, total):
+    from tqdm.auto import tqdm  # only with progress=True: tqdm is optional here
+    return tqdm(total=total, desc=pb.scene.name, unit="cycle")
+
+
+def _loop(pb, st, step, record_of, first, on_step, bar):
+    """Every cycle, simulated or jumped; returns the history, the last cycle's records
+    and the count of simulated cycles."""
+    spec = pb.scene.wear
+    total, jumps = spec.cycles, Jumps(spec.jump, spec.tolerance)
+    marks = record_cycles(total, spec.jump == 1)
+    hist = _History(pb, _kept_loops(total, spec.keep_tractions))
+    n, simulated, last = 0, 0, []
+    while n < total:
+        cycle = n + 1
+        before = {"depth": pb.wear.depth.copy(), "dissipation": st.dissipation,
+                  "s": st.s.copy(), "memories": memory_snapshot(st.memories)}
+        loop = hist.keeps(cycle)
+        p_max, stick_min, records = _cycle(pb, st, step, record_of, cycle, first,
+                                           keep=loop or cycle == total, on_step=on_step)
+        n, simulated = cycle, simulated + 1
+        if loop:
+            hist.keep(cycle, records)
+        if marks is None or cycle in marks:
+            hist.add(cycle, pb.wear.total, st.dissipation, p_max, stick_min)
+        if cycle == total:
+            last = records
+            break
+        size = min(jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0)),
+                   total - cycle)
+        _extrapolate(pb, st, before, size - 1)
+        n += size - 1
+        if bar is not None:
+            bar.set_postfix(jump=size, refresh=False)
+            bar.update(size)
+    if bar is not None:
+        bar.update(1)
+    return hist, last, simulated
+
+
+def run_cycles(pb, path, step, record_of, opts):
+    """Run the wear cycles of problem ``pb``; ``step(pb, st, k, path)`` solves an instant
+    and ``record_of(pb, st)`` gives the record of a state. Returns the Dataset, or the
+    archive written at ``path`` opened lazily (atomic: nothing is written on an error or
+    an interrupt)."""
+    from ..solver.state import State
+    accuracy_note, on_step, progress, _, wall0 = opts
+    wear, pb.wear = pb.wear, None         # the preload's estimate runs unworn, on scratch
+    try:
+        pre = preload.estimate(pb, step)
+    finally:
+        pb.wear, pb.grid.gap = wear, wear.gap()
+    first = Path(pre["substeps"], pb.limits)
+    st = State.initial(pb.grid.shape, pb.ops.new_memories())
+    bar = _progress(pb, pb.scene.wear.cycles) if progress else None
+    try:
+        hist, last, simulated = _loop(pb, st, step, record_of, first, on_step, bar)
+    finally:
+        if bar is not None:
+            bar.close()
+    attrs = pb.attrs(accuracy_note, pre)
+    attrs["models"] = f"{attrs['models']}, wear={pb.scene.wear.law}"
+    ds = _dataset(pb, attrs, last, hist)
+    ds.attrs.update({"wear_law": pb.scene.wear.law, "cycles_simulated": simulated,
+                     "wall_time_s": _time.perf_counter() - wall0})
+    problems = validate(ds)
+    if problems:
+        raise ArchiveError("wear run: the archive breaks its rules: " + "; ".join(problems))
+    if path is None:
+        return ds
+    out = pb.scene.output
+    save(ds, path, precision=out.precision, compress=out.compress)
+    return open_archive(path)
+
+
+def _dataset(pb, attrs, last, hist) -> xr.Dataset:
+    """The last cycle's instants (every ``output.stride``-th and the last) and the
+    history, as one Dataset."""
+    out = pb.scene.output
+    names = variables_for(pb.tang)
+    kw = {"maps": {"mu": pb.grid.mu}} if np.ndim(pb.grid.mu) else {}
+    writer = MemoryWriter(None, pb.grid.x1, pb.grid.x2, names, attrs,
+                          precision=out.precision, capacity=len(last), **kw)
+    shift = (pb.scene.wear.cycles - 1) * float(pb.t[-1] - pb.t[0])
+    stride, end = int(out.stride), len(last) - 1
+    for k, rec in enumerate(last):
+        if k % stride == 0 or k == end:
+            writer.append(float(pb.t[k]) + shift, rec)
+    ds = writer.close()
+    history = hist.variables(pb.t - pb.t[0])
+    coords = {k: v for k, v in history.items() if k in ("cycle", "loop_cycle", "loop_time")}
+    return ds.assign_coords(coords).assign(
+        {k: v for k, v in history.items() if k not in coords})
+
