@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["FIELD", "SERIES", "MAP", "CYCLE_FIELD", "CYCLE_SERIES", "LOOP_FIELD", "WEAR",
-           "MAPS", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS",
+           "HISTORY", "MAPS", "VARIABLES", "COORDINATES", "GLOBAL_ATTRS",
            "REQUIRED_ATTRS", "CONVENTIONS", "TANGENTIAL", "STATUS_SEPARATED", "STATUS_STICK",
            "STATUS_SLIP", "cf_attrs", "variables_for"]
 
@@ -109,6 +109,12 @@ VARIABLES: dict[str, dict] = {
                           model=TANGENTIAL, diagnostic=True),
     "fft_pairs": _v(SERIES, "1", "forward+inverse padded FFT pairs spent on that step",
                     dtype="int32", diagnostic=True),
+}
+
+#: A wear run's history over its records (``cycle``) and the loops of tractions it keeps
+#: (``loop_cycle``, ``loop_time``): written once at the end of the run, not per instant,
+#: so kept apart from :data:`VARIABLES` like the :data:`MAPS`.
+HISTORY: dict[str, dict] = {
     # the history of a wear run, over the completed cycles of each record
     "wear_depth": _v(CYCLE_FIELD, "m", "depth removed since the start, both bodies together",
                      model=WEAR),
@@ -186,7 +192,7 @@ def cf_attrs(name: str) -> dict:
     Ready for netCDF: ``flag_values`` is an array of the variable's own integer type, as
     CF asks.
     """
-    entry = VARIABLES.get(name) or MAPS.get(name) or COORDINATES[name]
+    entry = VARIABLES.get(name) or MAPS.get(name) or HISTORY.get(name) or COORDINATES[name]
     out = {k: entry[k] for k in _ATTR_KEYS if k in entry}
     if "flag_values" in out:
         out["flag_values"] = np.asarray(out["flag_values"], dtype=entry["dtype"])

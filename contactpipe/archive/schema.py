@@ -22,6 +22,7 @@ from ..nomenclature import (
     CONVENTIONS,
     COORDINATES,
     FIELD,
+    HISTORY,
     MAPS,
     REQUIRED_ATTRS,
     TANGENTIAL,
@@ -249,9 +250,10 @@ def _coordinate_problems(ds: xr.Dataset) -> list[str]:
 
 def _variable_schema_problems(ds: xr.Dataset) -> list[str]:
     problems = [f"unknown variable {name!r} (not in contactpipe.nomenclature.VARIABLES)"
-                for name in ds.data_vars if name not in VARIABLES and name not in MAPS]
-    for name in set(ds.data_vars) & set(MAPS):
-        v, entry = ds[name], MAPS[name]
+                for name in ds.data_vars
+                if name not in VARIABLES and name not in MAPS and name not in HISTORY]
+    for name in sorted(set(ds.data_vars) & (set(MAPS) | set(HISTORY))):
+        v, entry = ds[name], MAPS.get(name) or HISTORY[name]
         if tuple(v.dims) != entry["dims"]:
             problems.append(f"{name}: dims {tuple(v.dims)}, expected {entry['dims']}")
         if v.attrs.get("units") != entry["units"]:

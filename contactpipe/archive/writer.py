@@ -33,7 +33,7 @@ import xarray as xr
 from .._util.files import publish, temp_name
 from .._util.interrupts import raise_if_signalled
 from ..exceptions import ArchiveError, one_line
-from ..nomenclature import FIELD, MAP, MAPS, VARIABLES, cf_attrs
+from ..nomenclature import FIELD, HISTORY, MAP, MAPS, VARIABLES, cf_attrs
 from .content import content_problems
 from .schema import (
     COMPLEVEL,
@@ -578,8 +578,8 @@ def _encoding(ds: xr.Dataset, prec, compress: bool) -> dict:
     encoding = {}
     for name, v in ds.variables.items():
         enc = {"_FillValue": None, "fletcher32": True}
-        if name in VARIABLES or name in MAPS:
-            entry = VARIABLES.get(name) or MAPS[name]
+        if name in VARIABLES or name in MAPS or name in HISTORY:
+            entry = VARIABLES.get(name) or MAPS.get(name) or HISTORY[name]
             enc["dtype"] = (prec or v.dtype) if entry["dtype"] == "float" \
                 else np.dtype(entry["dtype"])
             dims = entry["dims"]

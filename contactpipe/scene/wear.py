@@ -124,9 +124,10 @@ class Wear(Part):
     @property
     def coefficients(self) -> tuple[float, float]:
         """(k_indenter, k_halfspace) [1/Pa]."""
-        if self.both:
-            return float(self.coefficient[0]), float(self.coefficient[1])
-        return 0.0, float(self.coefficient)
+        k = self.coefficient
+        if isinstance(k, tuple):
+            return float(k[0]), float(k[1])
+        return 0.0, float(k)
 
 
 def _open_rows(load) -> list[str]:

@@ -59,7 +59,7 @@ class Jumps:
         self.fixed = None if jump == "auto" else int(jump)
         self.tol = float(tolerance)
         self.size = 1
-        self._rate = None
+        self._rate: np.ndarray | None = None
 
     def choose(self, rate: np.ndarray) -> int:
         """The next jump, after a simulated cycle whose wear increment is ``rate`` [m]."""
@@ -80,10 +80,12 @@ class Jumps:
 
 def record_cycles(total: int, every: bool) -> set | None:
     """The cycles recorded when every cycle is simulated: about :data:`RECORDS`
-    log-spaced, the first and the last included; None (every simulated cycle) when
-    ``every`` is False (jumps are taken)."""
+    log-spaced, the first and the last included (all of them up to :data:`RECORDS`);
+    None (every simulated cycle) when ``every`` is False (jumps are taken)."""
     if not every:
         return None
+    if total <= RECORDS:
+        return set(range(1, total + 1))
     marks = np.round(np.logspace(0.0, math.log10(total), min(total, RECORDS)))
     return {int(c) for c in marks} | {1, total}
 
@@ -156,15 +158,17 @@ def _cycle(pb, st, step, record_of, cycle, first, *, keep, on_step):
         ks, records = range(0, pb.t.size), []
     else:
         ks = range(1, pb.t.size)
-        start = record_of(pb, st)
+        start = {key: np.array(v, copy=True) if isinstance(v, np.ndarray) else v
+                 for key, v in record_of(pb, st).items()}
         records = [start] if keep else []
     p_max, stick_min = 0.0, math.inf
     for k in ks:
         rec = step(pb, st, k, first)
         p_max = max(p_max, float(np.max(rec["p"])))
         stick_min = min(stick_min, float(rec.get("stick_area", 0.0)))
-        if keep:
-            records.append(rec)
+        if keep:                  # the solver may reuse the state's arrays: copies
+            records.append({key: np.array(v, copy=True) if isinstance(v, np.ndarray) else v
+                            for key, v in rec.items()})
         if on_step is not None:
             on_step(k, float(pb.t[k]) + shift, rec)
     if cycle > 1:
@@ -214,8 +218,8 @@ def _loop(pb, st, step, record_of, first, on_step, bar):
         if cycle == total:
             last = records
             break
-        size = min(jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0)),
-                   total - cycle)
+        size = jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0))
+        size = 1 if cycle == 1 else min(size, total - cycle)   # the first: a start-up
         _extrapolate(pb, st, before, size - 1)
         n += size - 1
         if bar is not None:
