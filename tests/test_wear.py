@@ -83,6 +83,15 @@ def test_wear_without_friction_is_refused():
     assert "\n" not in str(e.value) and "[wear] needs friction" in str(e.value)
 
 
+def test_a_jump_over_a_tabulated_creep_function_is_refused():
+    table = {"material": "viscoelastic", "young": 4e9, "poisson": 0.3,
+             "creep": "tabulated", "table": [[0.0, 1.0], [1.0, 2.0], [100.0, 4.0]]}
+    with pytest.raises(cp.SceneError) as e:
+        scene({**ZENER, "halfspace": table}, jump=5)
+    assert "\n" not in str(e.value) and str(e.value).startswith("wear.jump = 5")
+    assert scene({**ZENER, "halfspace": table}, jump=1).wear.jump == 1
+
+
 def test_wear_table_round_trips_and_is_absent_otherwise():
     s = scene(law="energy", coefficient=[1e-14, 3e-14], jump=7, keep_tractions=2)
     assert cp.Scene.from_toml_text(s.to_toml()) == s
