@@ -257,3 +257,32 @@ def test_zener_wear_runs_with_fixed_jumps():
     assert float(jumped.omega3[-1]) == pytest.approx(float(every.omega3[-1]), rel=5e-3)
     p_err = np.abs(jumped.p.values[-1] - every.p.values[-1]).max() / every.p.values.max()
     assert p_err < 0.01
+
+
+def test_a_wear_run_resumes_from_its_checkpoint(tmp_path):
+    """Interrupted inside cycle 8 (cycles 1, 2, 5, 8, 11, 12 simulated), a resumable
+    wear run checkpoints the state it reached after cycle 7 and writes nothing; run
+    again, it resumes there and ends with what an uninterrupted run gives."""
+    from contactpipe.exceptions import ResumeNotice
+    path = tmp_path / "wear.nc"
+    s = scene(cycles=12, jump=3, keep_tractions=3)
+
+    def stop(k, t, record):
+        if t > 7.3:
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt) as e:
+        cp.simulate(s, path, resume=True, on_step=stop)
+    assert e.value.resume_from == "cycle 8 of 12"
+    assert not path.exists() and (tmp_path / ".wear.nc.ckpt.npz").is_file()
+    with pytest.warns(ResumeNotice, match="after cycle 7 of 12"):
+        resumed = cp.simulate(s, path, resume=True)
+    whole = cp.simulate(s)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["wear.nc"]
+    assert int(resumed.attrs["cycles_simulated"]) == whole.attrs["cycles_simulated"] == 6
+    assert list(resumed.cycle.values) == list(whole.cycle.values) == [1, 2, 5, 8, 11, 12]
+    assert list(resumed.loop_cycle.values) == list(whole.loop_cycle.values)
+    scale = float(whole.wear_depth.max())
+    assert np.abs(resumed.wear_depth.values - whole.wear_depth.values).max() < 1e-6 * scale
+    assert np.allclose(resumed.cumulative_dissipation, whole.cumulative_dissipation,
+                       rtol=1e-6)
+    assert np.allclose(resumed.p, whole.p, rtol=0, atol=1e-6 * float(whole.p.max()))

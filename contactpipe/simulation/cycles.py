@@ -21,12 +21,15 @@ from __future__ import annotations
 
 import math
 import time as _time
+import warnings
+import zipfile
 
 import numpy as np
 import xarray as xr
 
-from ..archive import MemoryWriter, open_archive, save, validate
-from ..exceptions import ArchiveError
+from .._util.interrupts import deferred, raise_if_signalled
+from ..archive import MemoryWriter, save, validate
+from ..exceptions import ArchiveError, ResumeNotice, one_line
 from ..nomenclature import (
     CYCLE_FIELD,
     CYCLE_SERIES,
@@ -121,6 +124,29 @@ class _History:
         for name in ("p", "q1", "q2"):
             self.loops["loop_" + name].append(np.stack([rec[name] for rec in loop]))
 
+    def lengths(self) -> tuple:
+        return len(self.rows["cycle"]), len(self.loops["loop_cycle"])
+
+    def arrays(self, lengths) -> dict:
+        """The records and loops up to ``lengths`` as arrays (for a checkpoint)."""
+        n_rows, n_loops = lengths
+        out = {f"h_{k}": np.array(v[:n_rows], dtype=float) for k, v in self.rows.items()}
+        if n_loops:
+            out.update({f"l_{k}": np.array(v[:n_loops], dtype=float)
+                        for k, v in self.loops.items()})
+        return out
+
+    def restore(self, saved):
+        """Take the records and loops of a checkpoint."""
+        for k in self.rows:
+            self.rows[k] = [int(v) if k == "cycle" else v for v in saved[f"h_{k}"]]
+        if "l_loop_cycle" in saved:
+            for k in self.loops:
+                self.loops[k] = [int(v) if k == "loop_cycle" else v
+                                 for v in saved[f"l_{k}"]]
+            kept = max(self.loops["loop_cycle"])
+            self.targets = [t for t in self.targets if t > kept]
+
     def add(self, cycle, depth, dissipation, p_max, stick_min):
         depth = np.maximum(depth, 0.0)
         for key, v in (("cycle", cycle), ("wear_depth", depth.copy()),
@@ -163,6 +189,7 @@ def _cycle(pb, st, step, record_of, cycle, first, *, keep, on_step):
         records = [start] if keep else []
     p_max, stick_min = 0.0, math.inf
     for k in ks:
+        raise_if_signalled()             # a signal acts between two instants
         rec = step(pb, st, k, first)
         p_max = max(p_max, float(np.max(rec["p"])))
         stick_min = min(stick_min, float(rec.get("stick_area", 0.0)))
@@ -195,15 +222,98 @@ def _progress(pb, total):
     return tqdm(total=total, desc=pb.scene.name, unit="cycle")
 
 
-def _loop(pb, st, step, record_of, first, on_step, bar):
-    """Every cycle, simulated or jumped; returns the history, the last cycle's records
-    and the count of simulated cycles."""
+class _Boundary:
+    """The run at its last cycle boundary (the state a next cycle starts from), held in
+    memory so that an interrupt inside a cycle checkpoints a whole state."""
+
+    def __init__(self):
+        self.arrays: dict | None = None
+        self.saved_at = _time.perf_counter()
+
+    def take(self, pb, st, n, simulated, jumps, hist):
+        arrays = {f"st_{k}": np.array(v, copy=True) for k, v in st.arrays().items()}
+        arrays.update({"wear_depth": pb.wear.depth.copy(), "simulated": np.array(simulated),
+                       "jump_size": np.array(jumps.size)})
+        if jumps._rate is not None:
+            arrays["jump_rate"] = jumps._rate.copy()
+        self.n, self.arrays, self.lengths, self.hist = n, arrays, hist.lengths(), hist
+
+    def save(self, ckpt):
+        if ckpt is None or self.arrays is None:
+            return
+        ckpt.save(self.n, 0, {**self.arrays, **self.hist.arrays(self.lengths)})
+        self.saved_at = _time.perf_counter()
+
+
+def _resume(pb, st, ckpt, jumps, hist):
+    """(cycles completed, cycles simulated) of the checkpoint of ``ckpt`` taken into
+    ``st``, ``pb.wear``, ``jumps`` and ``hist``; (0, 0) without one (a damaged one is
+    dropped, and the run starts afresh)."""
+    if ckpt is None or not ckpt.found() or not ckpt.file.exists():
+        return 0, 0
+    name = ckpt.path.name
+    try:
+        with np.load(ckpt.file, allow_pickle=False) as z:
+            saved = {k: z[k] for k in z.files}
+        if str(saved.pop("digest")) != ckpt.digest:
+            raise ValueError("the checkpoint is of another scene")
+        n = int(saved["k"])
+        st.restore({k[3:]: v for k, v in saved.items() if k.startswith("st_")}, 0)
+        pb.wear.load_state({"depth": saved["wear_depth"]})
+        pb.grid.gap = pb.wear.gap()
+        jumps.size = int(saved["jump_size"])
+        jumps._rate = saved.get("jump_rate")
+        hist.restore(saved)
+        simulated = int(saved["simulated"])
+    except (OSError, ValueError, KeyError, EOFError, TypeError, zipfile.BadZipFile) as e:
+        warnings.warn(ResumeNotice(f"{name}: the wear run's checkpoint is unusable "
+                                   f"({one_line(e, with_type=False)}); starting afresh"),
+                      stacklevel=6)
+        ckpt.remove()
+        return -1, 0
+    warnings.warn(ResumeNotice(f"{name}: resuming the wear run after cycle {n} of "
+                               f"{pb.scene.wear.cycles}, its checkpoint ({simulated} "
+                               f"simulated)"), stacklevel=6)
+    return n, simulated
+
+
+def _loop(pb, st, step, record_of, first, on_step, bar, ckpt, every):
+    """Every cycle, simulated or jumped, from the checkpoint's (``ckpt``) or the first;
+    returns the history, the last cycle's records and the count of simulated cycles."""
     spec = pb.scene.wear
     total, jumps = spec.cycles, Jumps(spec.jump, spec.tolerance)
-    marks = record_cycles(total, spec.jump == 1)
     hist = _History(pb, _kept_loops(total, spec.keep_tractions))
-    n, simulated, last = 0, 0, []
+    n, simulated = _resume(pb, st, ckpt, jumps, hist)
+    if n < 0:                                        # a damaged checkpoint: afresh
+        return None
+    if bar is not None:
+        bar.update(n)
+    boundary = _Boundary()
+    try:
+        with deferred():
+            hist, last, simulated = _cycles(pb, st, step, record_of, first, on_step, bar,
+                                            ckpt, every, (n, simulated, jumps, hist,
+                                                          boundary))
+    except KeyboardInterrupt as err:
+        boundary.save(ckpt)
+        if ckpt is not None:
+            err.resume_from = f"cycle {boundary.n + 1} of {total}"
+        raise
+    if bar is not None:
+        bar.update(1)
+    return hist, last, simulated
+
+
+def _cycles(pb, st, step, record_of, first, on_step, bar, ckpt, every, start):
+    """The cycles from ``start`` = (completed, simulated, jumps, history, boundary)."""
+    n, simulated, jumps, hist, boundary = start
+    spec = pb.scene.wear
+    total, last = spec.cycles, []
+    marks = record_cycles(total, spec.jump == 1)
     while n < total:
+        boundary.take(pb, st, n, simulated, jumps, hist)
+        if ckpt is not None and _time.perf_counter() - boundary.saved_at > every:
+            boundary.save(ckpt)
         cycle = n + 1
         before = {"depth": pb.wear.depth.copy(), "dissipation": st.dissipation,
                   "s": st.s.copy(), "memories": memory_snapshot(st.memories)}
@@ -225,31 +335,43 @@ def _loop(pb, st, step, record_of, first, on_step, bar):
         if bar is not None:
             bar.set_postfix(jump=size, refresh=False)
             bar.update(size)
-    if bar is not None:
-        bar.update(1)
     return hist, last, simulated
 
 
-def run_cycles(pb, path, step, record_of, opts):
+def _simulate_all(pb, step, record_of, first, opts, ckpt):
+    """The cycles, from a checkpoint when there is a usable one."""
+    from ..solver.state import State
+    _, on_step, progress, every, _ = opts
+    for _attempt in range(2):
+        st = State.initial(pb.grid.shape, pb.ops.new_memories())
+        pb.wear.load_state({"depth": np.zeros_like(pb.wear.depth)})
+        pb.grid.gap = pb.wear.gap()
+        bar = _progress(pb, pb.scene.wear.cycles) if progress else None
+        try:
+            out = _loop(pb, st, step, record_of, first, on_step, bar, ckpt, every)
+        finally:
+            if bar is not None:
+                bar.close()
+        if out is not None:
+            return out
+    raise ArchiveError(f"{ckpt.path}: the wear run's checkpoint cannot be dropped")
+
+
+def run_cycles(pb, path, step, record_of, opts, ckpt=None):
     """Run the wear cycles of problem ``pb``; ``step(pb, st, k, path)`` solves an instant
     and ``record_of(pb, st)`` gives the record of a state. Returns the Dataset, or the
-    archive written at ``path`` opened lazily (atomic: nothing is written on an error or
-    an interrupt)."""
-    from ..solver.state import State
-    accuracy_note, on_step, progress, _, wall0 = opts
+    path of the archive written (atomic: nothing is written on an error or an interrupt).
+    With a :class:`~contactpipe.archive.Checkpoint` ``ckpt`` (a resumable run), the run
+    continues from its checkpoint, checkpoints at cycle boundaries every
+    ``checkpoint_seconds`` and on an interrupt, and drops it once the archive is written."""
+    accuracy_note, _, _, _, wall0 = opts
     wear, pb.wear = pb.wear, None         # the preload's estimate runs unworn, on scratch
     try:
         pre = preload.estimate(pb, step)
     finally:
         pb.wear, pb.grid.gap = wear, wear.gap()
     first = Path(pre["substeps"], pb.limits)
-    st = State.initial(pb.grid.shape, pb.ops.new_memories())
-    bar = _progress(pb, pb.scene.wear.cycles) if progress else None
-    try:
-        hist, last, simulated = _loop(pb, st, step, record_of, first, on_step, bar)
-    finally:
-        if bar is not None:
-            bar.close()
+    hist, last, simulated = _simulate_all(pb, step, record_of, first, opts, ckpt)
     attrs = pb.attrs(accuracy_note, pre)
     attrs["models"] = f"{attrs['models']}, wear={pb.scene.wear.law}"
     ds = _dataset(pb, attrs, last, hist)
@@ -262,7 +384,9 @@ def run_cycles(pb, path, step, record_of, opts):
         return ds
     out = pb.scene.output
     save(ds, path, precision=out.precision, compress=out.compress)
-    return open_archive(path)
+    if ckpt is not None:
+        ckpt.remove()
+    return path
 
 
 def _dataset(pb, attrs, last, hist) -> xr.Dataset:

@@ -538,28 +538,31 @@ def _start_record(pb, st) -> dict:
     return _record(pb, st, pb.W[0], None, 0, 0, 0)
 
 
+def _go(pb, path, ckpt, opts):
+    """March ``pb``, or repeat its program for a wear run (:mod:`.cycles`, written whole
+    at its end)."""
+    if pb.wear is not None:
+        return run_cycles(pb, path, _step, _start_record, opts, ckpt)
+    return _march(pb, path, ckpt, *opts)
+
+
 def _run(pb, path, resume, opts):
-    """March ``pb`` in memory (``path`` None), into a new archive, or resumably; a wear
-    run repeats the program (:mod:`.cycles`), written whole at its end."""
+    """March ``pb`` in memory (``path`` None), into a new archive, or resumably."""
     if path is None:
-        if pb.wear is not None:
-            return run_cycles(pb, None, _step, _start_record, opts)
-        return _march(pb, None, None, *opts)
+        return _go(pb, None, None, opts)
     try:
         make_folder(path.parent)
     except OSError as e:
         raise OutputPathError(f"archive {path}: cannot create its folder "
                               f"({e.strerror or one_line(e)})") from None
-    if pb.wear is not None:
-        return run_cycles(pb, path, _step, _start_record, opts)
     if not resume:
-        return open_archive(_march(pb, path, None, *opts))
+        return open_archive(_go(pb, path, None, opts))
     lock = resume_lock(path)
     with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
         ckpt = Checkpoint(path, pb.scene.digest())
         ckpt.clean()                    # what a run killed while checkpointing left
         try:
-            result = _march(pb, path, ckpt, *opts)
+            result = _go(pb, path, ckpt, opts)
         finally:
             lock.unlink(missing_ok=True)
     return open_archive(result)
