@@ -188,13 +188,21 @@ def test_archive_of_a_wear_run(tmp_path):
     assert float(ds.worn_volume[-1]) == float(back.worn_volume[-1])
 
 
-def test_records_are_log_spaced_when_every_cycle_is_simulated():
-    from contactpipe.simulation.cycles import RECORDS, record_cycles
-    marks = sorted(record_cycles(100_000, every=True))
-    assert marks[0] == 1 and marks[-1] == 100_000 and len(marks) <= RECORDS
+def test_records_are_log_spaced_besides_the_jumps(monkeypatch):
+    from contactpipe.simulation import cycles
+    marks = sorted(cycles.record_cycles(100_000))
+    assert marks[0] == 1 and marks[-1] == 100_000 and len(marks) <= cycles.RECORDS
     ratios = np.array(marks[1:]) / np.array(marks[:-1])
     assert ratios[-10:].max() < 1.2                       # 10^(5/99) = 1.12 apart
-    assert record_cycles(100, every=False) is None
+    assert cycles.record_cycles(40) == set(range(1, 41))
+    monkeypatch.setattr(cycles, "RECORDS", 6)             # 6 records of 20 cycles
+    coarse = {**BASE, "grid": {"points": [12, 12], "size": [6e-4, 6e-4]},
+              "time": {"steps": 4}}
+    ds = cp.simulate(scene(coarse, cycles=20, jump=1))    # every cycle simulated
+    assert list(ds.cycle.values) == [1, 2, 3, 6, 11, 20]
+    assert ds.attrs["cycles_simulated"] == 20
+    jumped = cp.simulate(scene(coarse, cycles=20, jump=8))   # and each cycle a jump leaves
+    assert list(jumped.cycle.values) == [1, 2, 10, 18, 20]
 
 
 def test_an_interrupted_wear_run_writes_nothing(tmp_path):

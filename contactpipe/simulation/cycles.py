@@ -14,8 +14,8 @@ The last cycle is always simulated. ``jump = "auto"`` chooses J from the change 
 wear increment between the last two simulated cycles (:class:`Jumps`).
 
 The archive holds the instants of the last cycle (over ``time``, absolute from t0) and the
-history at the records (over ``cycle``): every simulated cycle when jumps are taken,
-log-spaced cycles when every cycle is simulated, the first and the last always.
+history at the records (over ``cycle``): every simulated cycle a jump is taken from, and
+about :data:`RECORDS` log-spaced cycles (the first and the last among them).
 """
 from __future__ import annotations
 
@@ -81,15 +81,12 @@ class Jumps:
         return self.size
 
 
-def record_cycles(total: int, every: bool) -> set | None:
-    """The cycles recorded when every cycle is simulated: about :data:`RECORDS`
-    log-spaced, the first and the last included (all of them up to :data:`RECORDS`);
-    None (every simulated cycle) when ``every`` is False (jumps are taken)."""
-    if not every:
-        return None
+def record_cycles(total: int) -> set:
+    """The cycles recorded besides those a jump is taken from: about :data:`RECORDS`
+    log-spaced, the first and the last included (every cycle up to :data:`RECORDS`)."""
     if total <= RECORDS:
         return set(range(1, total + 1))
-    marks = np.round(np.logspace(0.0, math.log10(total), min(total, RECORDS)))
+    marks = np.round(np.logspace(0.0, math.log10(total), RECORDS))
     return {int(c) for c in marks} | {1, total}
 
 
@@ -309,7 +306,7 @@ def _cycles(pb, st, step, record_of, first, on_step, bar, ckpt, every, start):
     n, simulated, jumps, hist, boundary = start
     spec = pb.scene.wear
     total, last = spec.cycles, []
-    marks = record_cycles(total, spec.jump == 1)
+    marks = record_cycles(total)
     while n < total:
         boundary.take(pb, st, n, simulated, jumps, hist)
         if ckpt is not None and _time.perf_counter() - boundary.saved_at > every:
@@ -323,13 +320,14 @@ def _cycles(pb, st, step, record_of, first, on_step, bar, ckpt, every, start):
         n, simulated = cycle, simulated + 1
         if loop:
             hist.keep(cycle, records)
-        if marks is None or cycle in marks:
+        size = 1 if cycle == total else \
+            jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0))
+        size = 1 if cycle == 1 else min(size, total - cycle)   # the first: a start-up
+        if cycle in marks or size > 1 or cycle == total:
             hist.add(cycle, pb.wear.total, st.dissipation, p_max, stick_min)
         if cycle == total:
             last = records
             break
-        size = jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0))
-        size = 1 if cycle == 1 else min(size, total - cycle)   # the first: a start-up
         _extrapolate(pb, st, before, size - 1)
         n += size - 1
         if bar is not None:
