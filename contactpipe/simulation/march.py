@@ -516,6 +516,11 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
 
     Notes
     -----
+    A scene with ``[wear]`` repeats its load program ``wear.cycles`` times on the wearing
+    surface (:mod:`contactpipe.simulation.cycles`, docs/wear.md): the archive holds the
+    last cycle's instants and the wear history over ``cycle``; it is written whole at the
+    end, and a resumable one checkpoints at cycle boundaries.
+
     Ctrl-C, SIGTERM and SIGHUP raise :class:`Interrupted` (a ``KeyboardInterrupt``)
     while the run holds the main thread and no handler of the application is installed
     for them: at the end of the instant in progress (a second signal: at once), or just
