@@ -21,11 +21,12 @@ from contactpipe.scene import Scene
 from contactpipe.scene import parts as scene_parts
 from contactpipe.scene.model import FIELDS as SCENE_FIELDS
 from contactpipe.scene.tables import Field, Reader, nesting_depth, show
+from contactpipe.scene.wear import Wear
 from contactpipe.testing import TINY_SCENES
 
 PARTS = [scene_parts.Geometry, scene_parts.BodySpec, scene_parts.Friction,
          scene_parts.Fretting, scene_parts.Load, scene_parts.Grid, scene_parts.TimeMesh,
-         scene_parts.Solver, scene_parts.Output]
+         scene_parts.Solver, scene_parts.Output, Wear]
 
 
 # ----------------------------------------------------------------------------- the reader
@@ -119,7 +120,7 @@ def test_each_part_describes_exactly_its_fields(part):
                          "numbers", "integers", "strings", "pairs", "table") for k in kinds)
     assert [f.name for f in SCENE_FIELDS] == ["name", "geometry", "indenter", "halfspace",
                                               "friction", "load", "grid", "time", "solver",
-                                              "output"]
+                                              "output", "wear"]
 
 
 # ----------------------------------------------------------------------------- every table

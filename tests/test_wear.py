@@ -103,7 +103,9 @@ def test_wear_table_round_trips_and_is_absent_otherwise():
 # ----------------------------------------------------------------------------- identities
 
 def _identity_error(ds, k_sum, law):
-    """Largest relative departure of worn_volume from its dissipation identity."""
+    """Largest relative departure of worn_volume from its dissipation identity (exact
+    up to the solver's tolerance, and the jumps extrapolate both alike: measured 2e-16
+    to 1e-15; asserted below 1e-6, within the issue's 1 %)."""
     factor = k_sum / MU_ if law == "archard" else k_sum
     V = ds.worn_volume.values
     E = ds.cumulative_dissipation.values
@@ -115,7 +117,7 @@ def test_archard_identity_with_jumps():
     # the first cycle (a start-up from the unloaded state) is never jumped from
     assert ds.attrs["cycles_simulated"] == 6 and ds.attrs["wear_law"] == "archard"
     assert list(ds.cycle.values) == [1, 2, 9, 16, 23, 30]
-    assert _identity_error(ds, 2e-13, "archard") < 0.01
+    assert _identity_error(ds, 2e-13, "archard") < 1e-6
     assert np.all(np.diff(ds.worn_volume.values) > 0)
     assert "wear=archard" in ds.attrs["models"]
     assert validate(ds) == []
@@ -125,7 +127,7 @@ def test_archard_identity_with_jumps():
 def test_energy_identity_one_body_and_both(k):
     ds = cp.simulate(scene(law="energy", coefficient=k, cycles=30, jump=4))
     k_sum = float(np.sum(k))
-    assert _identity_error(ds, k_sum, "energy") < 0.01
+    assert _identity_error(ds, k_sum, "energy") < 1e-6
     assert ds.attrs["cycles_simulated"] == 9
 
 
@@ -135,7 +137,7 @@ def test_gross_slip_under_displacement_control():
     load = {"time": [0.0, 0.25, 0.5, 0.75, 1.0], "normal_force": 100.0,
             "tangential_displacement": [0.0, 3e-6, 0.0, -3e-6, 0.0]}
     ds = cp.simulate(scene({**BASE, "load": load}, cycles=12, jump=3))
-    assert _identity_error(ds, 2e-13, "archard") < 0.01
+    assert _identity_error(ds, 2e-13, "archard") < 1e-6
     depth = ds.wear_depth.values[-1]
     assert depth[8, 8] > 0.5 * depth.max()            # the centre cell slides too
     assert float(ds.stick_area.min()) == 0.0
@@ -235,7 +237,7 @@ def test_auto_jump_against_every_cycle_elastic():
     assert every.attrs["cycles_simulated"] == 300
     assert auto.attrs["cycles_simulated"] <= 60
     assert depth_err < 0.02 and volume_err < 0.01
-    assert _identity_error(auto, 2e-13, "archard") < 0.01
+    assert _identity_error(auto, 2e-13, "archard") < 1e-6
 
 
 @pytest.mark.slow
@@ -247,7 +249,7 @@ def test_zener_wear_against_every_cycle():
         ZENER, law="energy", coefficient=2e-12, cycles=60)
     assert auto.attrs["cycles_simulated"] < 40
     assert depth_err < 0.02 and volume_err < 0.01
-    assert _identity_error(auto, 2e-12, "energy") < 0.01
+    assert _identity_error(auto, 2e-12, "energy") < 1e-6
     assert float(auto.omega3[-1]) == pytest.approx(float(every.omega3[-1]), rel=1e-3)
 
 
@@ -261,7 +263,7 @@ def test_zener_wear_runs_with_fixed_jumps():
     jumped = cp.simulate(scene(ZENER, law="energy", coefficient=2e-12, cycles=13, jump=3))
     every = cp.simulate(scene(ZENER, law="energy", coefficient=2e-12, cycles=13, jump=1))
     assert jumped.attrs["cycles_simulated"] == 6
-    assert _identity_error(jumped, 2e-12, "energy") < 0.01
+    assert _identity_error(jumped, 2e-12, "energy") < 1e-6
     assert float(jumped.omega3[-1]) == pytest.approx(float(every.omega3[-1]), rel=5e-3)
     p_err = np.abs(jumped.p.values[-1] - every.p.values[-1]).max() / every.p.values.max()
     assert p_err < 0.01
