@@ -296,3 +296,20 @@ def test_a_wear_run_resumes_from_its_checkpoint(tmp_path):
     assert np.allclose(resumed.cumulative_dissipation, whole.cumulative_dissipation,
                        rtol=1e-6)
     assert np.allclose(resumed.p, whole.p, rtol=0, atol=1e-6 * float(whole.p.max()))
+
+
+def test_maxwell_creep_goes_on_over_the_jumps():
+    """A rigid ball on a Maxwell polymer (E = 4 GPa, t' = 20 s) creeps on under its
+    constant W: the dashpot's integral advanced over the jumps keeps the approach of the
+    last cycle within 1e-3 of every-cycle simulation (measured 6.6e-5; left as it is,
+    12.7 % short), while the ball sinks by 1.8 % over the run."""
+    maxwell = {**ZENER, "grid": {"points": [16, 16], "size": [3e-3, 3e-3]},
+               "halfspace": {"material": "viscoelastic", "young": 4e9, "poisson": 0.3,
+                             "creep": "maxwell", "relaxation_time": 20.0}}
+    every = cp.simulate(scene(maxwell, law="energy", coefficient=1e-13, cycles=13, jump=1))
+    jumped = cp.simulate(scene(maxwell, law="energy", coefficient=1e-13, cycles=13, jump=3))
+    assert jumped.attrs["cycles_simulated"] == 6
+    w_every, w_jumped = float(every.omega3[-1]), float(jumped.omega3[-1])
+    assert abs(w_jumped / w_every - 1) < 1e-3
+    assert w_every - float(every.omega3[0]) > 0.015 * w_every
+    assert _identity_error(jumped, 1e-13, "energy") < 1e-6
