@@ -252,7 +252,7 @@ def _variable_schema_problems(ds: xr.Dataset) -> list[str]:
     problems = [f"unknown variable {name!r} (not in contactpipe.nomenclature.VARIABLES)"
                 for name in ds.data_vars
                 if name not in VARIABLES and name not in MAPS and name not in HISTORY]
-    for name in sorted(set(ds.data_vars) & (set(MAPS) | set(HISTORY))):
+    for name in sorted(str(n) for n in ds.data_vars if n in MAPS or n in HISTORY):
         v, entry = ds[name], MAPS.get(name) or HISTORY[name]
         if tuple(v.dims) != entry["dims"]:
             problems.append(f"{name}: dims {tuple(v.dims)}, expected {entry['dims']}")

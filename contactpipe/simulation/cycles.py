@@ -294,7 +294,7 @@ def _loop(pb, st, step, record_of, first, on_step, bar, ckpt, every):
     except KeyboardInterrupt as err:
         boundary.save(ckpt)
         if ckpt is not None:
-            err.resume_from = f"cycle {boundary.n + 1} of {total}"
+            err.resume_from = f"cycle {boundary.n + 1} of {total}"  # type: ignore[attr-defined]
         raise
     if bar is not None:
         bar.update(1)
