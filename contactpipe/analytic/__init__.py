@@ -33,6 +33,9 @@ Frictional indentation of dissimilar bodies (Spence)
 Viscoelastic normal contact (rigid sphere, Lee-Radok)
     :func:`lee_radok_sphere`, :func:`lee_radok_radius`, :func:`relaxation_function`,
     :func:`lee_radok_pressure`.
+Fretting wear (sphere, partial slip, force control)
+    :func:`fretting_wear_limit` (Popov's limiting worn state: stick radius, pressure,
+    approach and wear depth once the slip annulus has worn to zero pressure).
 Utility
     :func:`cell_average` (Gauss-Legendre average of a closed-form field over grid cells).
 
@@ -54,6 +57,8 @@ References
    (1951) 183-187 (and [J85]_ §7.4).
 .. [S75] D. A. Spence, "The Hertz contact problem with finite friction", J. Elasticity 5
    (1975) 297-319 (and [J85]_ §5.2).
+.. [P14] V. L. Popov, "Analytic solution for the limiting shape of profiles due to
+   fretting wear", Sci. Rep. 4 (2014) 3749 (see :mod:`contactpipe.analytic.wear_limit`).
 .. [Ja98] J. Jaeger, "A new principle in contact mechanics", J. Tribol. 120 (1998)
    677-684 (superposition of Cattaneo distributions for load histories).
 """
@@ -102,6 +107,7 @@ from .torsion import (
                     torsional_compliance,
                     torsional_stiffness,
 )
+from .wear_limit import FrettingWearLimit, fretting_wear_limit
 
 __all__ = [
     "composite_modulus", "tangential_compliance_sum",
@@ -119,5 +125,6 @@ __all__ = [
     "LeeRadokContact", "lee_radok_sphere", "lee_radok_radius", "relaxation_function",
     "lee_radok_pressure",
     "spence_stick_ratio",
+    "FrettingWearLimit", "fretting_wear_limit",
     "cell_average",
 ]
