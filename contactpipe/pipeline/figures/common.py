@@ -23,7 +23,7 @@ __all__ = ["input_kind", "open_input", "has_tangential_load", "figure_applies"]
 
 KINDS = ("profiles", "maps", "hysteresis", "radii")
 INPUTS = {
-    "archive": ("an archive", KINDS + ("all",)),
+    "archive": ("an archive", KINDS + ("wear", "all")),
     "stress": ("a stress file", ("stress",)),
     "sweep": ("a sweep folder", ("sweep", "fretting-map")),
 }

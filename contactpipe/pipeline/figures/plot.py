@@ -1,6 +1,6 @@
 """Standard figures of an archive, a stress file or a sweep (matplotlib, never pyplot).
 
-``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|all``;
+``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|wear|all``;
 ``contactpipe plot STRESS.nc -o FIG.png [--kind stress] [--variable FIELD]`` for a stress
 file (written by ``contactpipe stress`` or the pipeline's ``[stress]`` product);
 ``contactpipe plot SWEEP_DIR/ -o FIG.png [--kind sweep] [--variable NAME]`` for a sweep
@@ -17,6 +17,9 @@ and exit status 2, nothing written.
   side with their colour bars beneath.
 - :func:`plot_hysteresis`: the fretting loop T1 against omega1.
 - :func:`plot_radii`: contact and stick radii against time.
+- :func:`plot_wear`: the wear figure of a wear run (worn profile at several cycles, wear
+  depth map, pressure, worn volume and dissipated energy against cycles;
+  :mod:`contactpipe.pipeline.figures.wear`).
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
 - :func:`plot_fretting_map`: the regime of each member of a fretting sweep over the
   displacement amplitude and mu or W, with the closed-form boundary
@@ -77,10 +80,11 @@ from .series import plot_hysteresis, plot_radii
 from .stress import plot_stress as draw_stress
 from .stress import plot_stress_section, plot_stress_surface
 from .sweeps import plot_sweep
+from .wear import is_wear_archive, plot_wear
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
            "plot_stress", "plot_stress_section", "plot_stress_surface", "plot_fretting_map",
-           "plot_energy_ratio", "standard_figures",
+           "plot_energy_ratio", "plot_wear", "standard_figures",
            "save_figure", "new_figure", "has_tangential_load", "figure_applies",
            "input_kind", "open_input", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS",
            "INPUTS"]
@@ -384,7 +388,8 @@ def standard_figures(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
 
     ``<prefix>profiles.png`` and ``<prefix>maps.png`` (at ``instant``) always,
     ``<prefix>hysteresis.png`` for a frictional archive with a tangential load,
-    ``<prefix>radii.png`` always (:func:`save_figure` each).
+    ``<prefix>radii.png`` always, ``<prefix>wear.png`` for the archive of a wear run
+    (:func:`save_figure` each).
 
     Returns
     -------
@@ -402,6 +407,8 @@ def standard_figures(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
         if has_tangential_load(ds):
             drawn.append(("hysteresis", plot_hysteresis(ds)))
         drawn.append(("radii", plot_radii(ds)))
+        if is_wear_archive(ds):
+            drawn.append(("wear", plot_wear(ds)))
     return [save_figure(fig, out_dir / f"{prefix}{kind}.png") for kind, fig in drawn]
 
 
@@ -417,8 +424,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--kind", choices=sorted({k for _, ks in INPUTS.values() for k in ks}),
                         default=None,
                         help="which figure: for an archive profiles (default), maps, "
-                             "hysteresis, radii or all; for a stress file stress; for a "
-                             "sweep folder sweep (default) or fretting-map")
+                             "hysteresis, radii, wear (a wear run) or all; for a stress "
+                             "file stress; for a sweep folder sweep (default) or "
+                             "fretting-map")
     parser.add_argument("--instant", type=int, default=None,
                         help="instant index K (negative from the end): the one profile, "
                              "map or stress field shown")
@@ -458,6 +466,8 @@ def _draw(kind, source, args):
         return plot_profiles(source, None if args.instant is None else [args.instant])
     if kind == "maps":
         return plot_maps(source, k)
+    if kind == "wear":
+        return plot_wear(source)
     return plot_hysteresis(source) if kind == "hysteresis" else plot_radii(source)
 
 
