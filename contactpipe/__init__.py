@@ -36,13 +36,14 @@ _LAZY = {
     "Scene": "scene", "Plan": "planning", "plan": "planning", "simulate": "simulation",
     "open_archive": "archive", "save": "archive", "subsurface_stress": "post.stress",
     "fatigue": "post.fatigue", "compare": "pipeline.compare", "open_sweep": "pipeline.sweep",
-    "sweep": "pipeline.sweep",
+    "sweep": "pipeline.sweep", "fatigue_over_cycles": "post.wear_fatigue",
 }
 
 __all__ = [
     "__version__", "Scene", "simulate", "save", "open_archive", "plan", "Plan",
     "SceneError", "ConvergenceError", "GrossSlidingError", "GridError", "ArchiveError",
     "ContactpipeError", "sweep", "open_sweep", "compare", "subsurface_stress", "fatigue",
+    "fatigue_over_cycles",
 ]
 
 

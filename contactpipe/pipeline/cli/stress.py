@@ -2,6 +2,8 @@
 
     contactpipe stress run.nc -o stress.nc --x3 0,1e-4,2e-4 [--body halfspace|indenter]
                            [--time T|all] [--figure FIG.png] [--precision float32]
+    contactpipe stress wear.nc -o crossland.nc --x3 0,2e-5 --over-cycles crossland \
+                           --constant torsion_limit=300e6 --constant bending_limit=450e6
 
 Reads the archive's tractions (p, q1, q2) and its scene (for the body's Poisson ratio) and
 writes a netCDF file over (time, x3, x1, x2) with s11 s22 s33 s12 s13 s23 and von_mises
@@ -9,6 +11,12 @@ writes a netCDF file over (time, x3, x1, x2) with s11 s22 s33 s12 s13 s23 and vo
 last; ``--time all`` every instant. The archive is read lazily and the stress is streamed
 to the file block by block (instants x depths), so archives larger than memory work.
 The file is written atomically (nothing is left on failure).
+
+``--over-cycles CRITERION`` (the archive of a wear run that kept loops of tractions,
+``wear.keep_tractions``): the criterion of :func:`contactpipe.fatigue` (constants by
+``--constant NAME=VALUE``) on the stress history of every kept loop, and the file written
+holds its largest value and where it is against the kept cycles
+(:func:`contactpipe.post.wear_fatigue.fatigue_over_cycles`).
 
 Exit status: 0 on success; 2 on bad input (arguments, an output that is an input or the
 other output, an unreadable, foreign or damaged archive, an unknown body, a depth below
@@ -38,12 +46,14 @@ from ..._util.files import atomic_path, check_output_path, make_folder
 from ...archive import open_archive
 from ...archive.schema import scene_table
 from ...exceptions import ArchiveError, ContactpipeError, one_line
-from ...post.fatigue import fatigue
+from ...post.fatigue import CRITERIA, fatigue
 from ...post.stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
+from ...post.wear_fatigue import fatigue_over_cycles
 from ..figures.plot import plot_stress, save_figure
 from ..sweep.config import StressSpec
 
-__all__ = ["add_arguments", "main", "parse_depths", "parse_time", "write_stress_product",
+__all__ = ["add_arguments", "main", "parse_depths", "parse_time", "parse_constants",
+           "write_stress_product",
            "product_record", "stored_digest", "SETTINGS_ATTR", "DIGEST_ATTR"]
 
 #: Attributes of a pipeline product: its settings (JSON) and their digest.
@@ -101,6 +111,50 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="storage type of the stresses (default float64)")
     parser.add_argument("--fft", choices=("auto", "pyfftw", "scipy"), default="auto")
     parser.add_argument("--threads", type=int, default=1, help="FFT threads")
+    parser.add_argument("--over-cycles", choices=tuple(CRITERIA), default=None,
+                        metavar="CRITERION",
+                        help="a wear run with kept loops: write this fatigue criterion's "
+                             "largest value against the kept cycles (" +
+                             ", ".join(CRITERIA) + ") instead of the stress")
+    parser.add_argument("--constant", action="append", default=[], metavar="NAME=VALUE",
+                        help="a constant of the --over-cycles criterion, e.g. "
+                             "torsion_limit=300e6 (repeat for each)")
+
+
+def parse_constants(items) -> dict:
+    """``["name=value", ...]`` as keyword arguments (numbers where they parse)."""
+    out = {}
+    for item in items:
+        name, sep, value = str(item).partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise ValueError(f"--constant {item!r}: give NAME=VALUE, e.g. "
+                             "torsion_limit=300e6")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            out[name.strip()] = value.strip()
+    return out
+
+
+def _over_cycles(args, ds, depths) -> int:
+    """``--over-cycles``: the criterion over the kept loops, written atomically."""
+    constants = parse_constants(args.constant)
+    try:
+        fc = fatigue_over_cycles(ds, depths, args.over_cycles, body=args.body,
+                                 fft=args.fft, **constants)
+    except (ValueError, ArchiveError) as err:       # constants, loops: bad input
+        if getattr(args, "debug", False):
+            raise
+        print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
+        return 2
+    make_folder(args.output.parent)
+    with atomic_path(args.output) as tmp:
+        fc.to_netcdf(tmp)
+    k = int(np.argmax(fc["maximum"].values))
+    print(f"wrote {args.output} ({fc.sizes['cycle']} kept cycle(s); largest "
+          f"{fc.attrs['criterion_field']} {float(fc['maximum'][k]):.4g} at cycle "
+          f"{int(fc['cycle'][k])}, x3 = {float(fc['maximum_x3'][k]):.4g} m)")
+    return 0
 
 
 def _scene_files(ds) -> list:
@@ -152,6 +206,11 @@ def main(args) -> int:
             raise
         print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
         return 2
+    if args.over_cycles is not None:
+        try:
+            return _over_cycles(args, ds, depths)
+        finally:
+            ds.close()
     try:
         st = subsurface_stress(ds, depths, body=args.body, time=time, fft=args.fft,
                                threads=args.threads)
