@@ -31,6 +31,9 @@ memory      per-step time at steps 10 and 1000 of a 64² creep run (Maxwell, Pro
 paper-fig3  rigid sphere on a Maxwell half-space (ν = 0.3, coupling on), 128², 200 steps, end to end
             (``--vector`` adds the vector tangential form)
 long-run    256², 2000 steps streamed to disk: peak resident memory
+wear        10⁵ cycles of partial-slip fretting with Archard wear, 48², 20 steps a cycle,
+            jump auto, end to end; and jump auto against every cycle simulated over a
+            shorter life (:mod:`contactpipe.pipeline.cli.bench_wear`)
 
 ``--tuning NAME=VALUE ...`` runs ``fretting`` and ``paper-fig3`` with solver switches
 or constants changed from their defaults (:class:`contactpipe.solver.options.Tuning`,
@@ -39,11 +42,12 @@ columns of two runs show what a feature saves.
 
 The table
 ---------
-``normal``, ``fretting`` and ``paper-fig3`` write their rows to
+``normal``, ``fretting``, ``paper-fig3`` and ``wear`` write their rows to
 ``benchmarks/results/bench-<case>.csv`` (beside the package in a source checkout, else
 under the current folder), or all to ``--csv PATH``, atomically (a reader never sees half a
-file), with the columns of :data:`COLUMNS`: the date (UTC), the commit, the CPUs and the
-one-minute load average during the row's run say on what it was measured. ``--quick``
+file), with the columns of :data:`COLUMNS` (``wear``: its own,
+:data:`~contactpipe.pipeline.cli.bench_wear.WEAR_COLUMNS`): the date (UTC), the commit, the
+CPUs and the one-minute load average during the row's run say on what it was measured. ``--quick``
 (16², 5 steps: seconds) writes no file unless ``--csv`` is given, so the checked-in tables
 keep full figures. ``memory`` and ``long-run`` only print.
 
@@ -73,6 +77,7 @@ from ...scene import Scene
 from ...simulation import simulate
 from ...solver.convolution import Convolver
 from ...solver.options import tuning_from
+from .bench_wear import QUICK_WEAR, WEAR_COLUMNS, bench_wear
 
 __all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
            "table_rows", "write_table", "default_table_path"]
@@ -92,7 +97,7 @@ COLUMNS = ("case", "pair", "grid", "steps", "tolerance", "form", "pairs_per_step
            "first_instant_pairs", "preload_estimate_pairs", "run_pairs", "run_s",
            "date", "commit", "cpus", "load_average")
 #: The cases that write the table (the others only print).
-TABLE_CASES = ("normal", "fretting", "paper-fig3")
+TABLE_CASES = ("normal", "fretting", "paper-fig3", "wear")
 #: ``--quick``: a smoke run of seconds.
 QUICK = dict(grids=[16], steps=5, memory=(16, 25), long_run=(16, 20))
 _ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -322,7 +327,7 @@ def bench_long_run(backend, threads, n=256, steps=2000):
 
 
 CASES = {"normal": bench_normal, "fretting": bench_fretting, "memory": bench_memory,
-         "paper-fig3": bench_paper_fig3, "long-run": bench_long_run}
+         "paper-fig3": bench_paper_fig3, "long-run": bench_long_run, "wear": bench_wear}
 
 
 # ----------------------------------------------------------------------------- the table
@@ -361,14 +366,16 @@ def table_rows(records, date=None, commit=None) -> list:
     date = date or f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%dT%H:%MZ}"
     commit = commit or _commit()
     meta = dict(date=date, commit=commit, cpus=os.cpu_count() or "")
-    return [{c: _cell({**r, **meta}.get(c, "")) for c in COLUMNS}
+    return [{c: _cell({**r, **meta}.get(c, ""))
+             for c in (WEAR_COLUMNS if r["case"] == "wear" else COLUMNS)}
             for r in records if r["case"] in TABLE_CASES]
 
 
 def write_table(rows, path) -> pathlib.Path:
     """Write the rows of :func:`table_rows` to ``path`` as CSV, atomically."""
     text = io.StringIO()
-    w = csv.DictWriter(text, fieldnames=COLUMNS, lineterminator="\n")
+    w = csv.DictWriter(text, fieldnames=list(rows[0]) if rows else COLUMNS,
+                       lineterminator="\n")
     w.writeheader()
     w.writerows(rows)
     path = pathlib.Path(path)
@@ -404,6 +411,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _run_case(case, args, tuning=None):
     grids, steps = args.grids, args.steps
+    if case == "wear":
+        kw = dict(QUICK_WEAR) if args.quick else {}
+        if grids:
+            kw["n"] = grids[0]
+        if steps:
+            kw["steps"] = steps
+        return bench_wear(args.fft, args.threads, **kw)
     if args.quick:
         grids, steps = grids or QUICK["grids"], steps or QUICK["steps"]
     if case == "normal":
@@ -434,6 +448,9 @@ def main(args) -> int:
         tuning = tuning_from(args.tuning) if args.tuning else None
     except ValueError as e:
         raise SceneError(f"bench --{e}") from None
+    if args.csv is not None and "wear" in args.cases and len(set(args.cases)) > 1:
+        raise SceneError("bench --csv with wear and other cases: the wear table has its own "
+                         "columns; run wear alone")
     csv_path = None if args.csv is None else check_output_path(args.csv, "table (--csv)")
     date = f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%dT%H:%MZ}"
     tables = []
