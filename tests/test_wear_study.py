@@ -19,8 +19,8 @@ def test_wear_vs_cracking_quick(tmp_path):
     """The table and the figure; the worn volume grows with the amplitude (more slip,
     more wear: 1.1e-7, 2.6e-6, 2.2e-5 mm^3 measured), every member jumps (12 of 1000
     cycles simulated), the Crossland peak sits at the surface at the end of life, and the
-    unworn contact.s
-    peak grows from partial slip to the gross slip boundary (0.206 to 0.337 measured)."""
+    unworn contact's peak grows from partial slip to the gross slip boundary (0.206 to
+    0.337 measured)."""
     out = wear_vs_cracking.main(["--quick", "--out", str(tmp_path), "--scheduler",
                                  "synchronous"])
     assert pathlib.Path(out["png"]).stat().st_size > 20000
