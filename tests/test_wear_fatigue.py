@@ -81,3 +81,23 @@ def test_cli_over_cycles_refuses_an_archive_without_loops(tmp_path, capsys):
     assert status == 2 and len(err.strip().splitlines()) == 1, err
     assert "not the archive of a wear run" in err
     assert not (tmp_path / "c.nc").exists()
+
+
+def test_cli_over_cycles_of_a_wear_run(tmp_path, capsys):
+    """A real wear run (16², 10 cycles, loops of cycles 1 and 10 kept): the file holds
+    the criterion over the kept cycles, equal to cp.fatigue_over_cycles of the archive."""
+    from wear_archive import wear_run
+
+    from contactpipe.pipeline.cli import main as cli_main
+    archive = wear_run(tmp_path / "wear.nc")
+    out = tmp_path / "crossland.nc"
+    assert cli_main(["stress", str(archive), "-o", str(out), "--x3", "0,2e-5",
+                     "--over-cycles", "crossland", "--constant", "torsion_limit=300e6",
+                     "--constant", "bending_limit=450e6"]) == 0
+    assert "largest crossland_index" in capsys.readouterr().out
+    direct = cp.fatigue_over_cycles(archive, [0.0, 2e-5], "crossland", **CROSSLAND)
+    with xr.open_dataset(out) as got:
+        assert got["cycle"].values.tolist() == [1, 10]
+        np.testing.assert_allclose(got["maximum"].values, direct["maximum"].values,
+                                   rtol=1e-12)
+        assert np.all(got["maximum"].values > 0)

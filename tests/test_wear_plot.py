@@ -69,3 +69,15 @@ def test_cli_refuses_a_non_wear_archive(tmp_path, capsys):
     assert status == 2 and len(err.strip().splitlines()) == 1, err
     assert "wear run" in err and "no 'cycle' dimension" in err
     assert not (tmp_path / "w.png").exists()
+
+
+def test_cli_draws_a_wear_run(tmp_path, capsys):
+    """A real wear run (16², 10 cycles, two kept loops) through the command line."""
+    from wear_archive import wear_run
+    archive = wear_run(tmp_path / "wear.nc")
+    assert cli_main(["plot", str(archive), "-o", str(tmp_path / "w.png"), "--kind",
+                     "wear"]) == 0
+    assert "wrote" in capsys.readouterr().out
+    check_png(tmp_path / "w.png")
+    fig = plot.plot_wear(archive)
+    assert [ln.get_label() for ln in fig.get_axes()[2].get_lines()] == ["N = 1", "N = 10"]

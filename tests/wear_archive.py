@@ -70,3 +70,22 @@ def wear_dataset(n=24, steps=8, cycles=(1, 3, 10, 30, 100, 300, 1000), simulated
         ds = ds.assign_coords(loop_cycle=("loop_cycle", kc, {"units": "1"}),
                                loop_time=("loop_time", t, {"units": "s"}))
     return ds
+
+
+def wear_run(path, n=16, cycles=10, keep=2, k=1e-11):
+    """A real wear run written to ``path``: steel on steel, W = 1 kN, mu = 0.3, T = 0 ->
+    T* -> 0 -> -T* -> 0 with T* = 0.875 mu W, 8 steps a cycle, Archard, jump auto, the
+    loops of ``keep`` cycles kept. Returns the path."""
+    import contactpipe as cp
+    steel = {"material": "elastic", "young": 210e9, "poisson": 0.3}
+    a = an.hertz_sphere(W, R, E_STAR).contact_radius
+    scene = cp.Scene(
+        name="wear-run", geometry={"shape": "sphere", "radius": R},
+        indenter=dict(steel), halfspace=dict(steel), friction={"mu": MU},
+        load={"time": [0, 0.25, 0.5, 0.75, 1.0], "normal_force": W,
+              "tangential_force": [0, T_STAR, 0, -T_STAR, 0]},
+        grid={"points": [n, n], "size": [3.5 * a, 3.5 * a]}, time={"steps": 8},
+        wear={"law": "archard", "coefficient": k, "cycles": cycles, "jump": "auto",
+              "keep_tractions": keep})
+    cp.simulate(scene, path).close()
+    return path
