@@ -55,3 +55,34 @@ def test_sweep_of_a_wear_scene_keeps_the_cycle_dimension(tmp_path, jump):
             float(sw["worn_volume"].sel(mu=1.0, cycle=20))
     finally:
         sw.close()
+
+
+def test_pipeline_runs_a_wear_sweep(tmp_path, capsys):
+    """contactpipe pipeline over the same wear scene: the members are not compared (no
+    closed form describes a worn contact: not a failure), each gets its wear figure, and
+    the sweep overlay draws the worn volume against cycles."""
+    from contactpipe.pipeline.cli import main as cli_main
+    (tmp_path / "base.toml").write_text(_scene("auto").to_toml())
+    (tmp_path / "pipeline.toml").write_text(
+        'name = "wear-pipe"\nout = "runs"\n[sweep]\nbase = "base.toml"\n'
+        '[sweep.axes]\n"friction.mu" = [0.6, 1.0]\n'
+        '[plot]\nfigures = ["wear", "hysteresis", "sweep"]\n'
+        'variables = ["worn_volume", "contact_area"]\n')
+    assert cli_main(["pipeline", str(tmp_path / "pipeline.toml"), "--scheduler",
+                     "synchronous", "--no-progress"]) == 0
+    assert "0 failed" in capsys.readouterr().out
+    figs = sorted(p.name for p in (tmp_path / "runs" / "figures").glob("*.png"))
+    assert sum(f.endswith("-wear.png") for f in figs) == 2
+    assert "sweep-worn_volume.png" in figs and "sweep-contact_area.png" in figs
+    assert not (tmp_path / "runs" / "compare").exists() or \
+        not list((tmp_path / "runs" / "compare").glob("*.nc"))
+
+
+def test_no_closed_form_describes_a_wear_run():
+    """The Mindlin-Deresiewicz closed form fits the scene without [wear], not with it."""
+    from contactpipe.pipeline.compare.reference import diagnose
+    worn = _scene("auto")
+    name, why = diagnose(worn)
+    assert name is None and all("[wear]" in r[0] for r in why.values())
+    plain = cp.Scene(**{k: v for k, v in worn.to_dict().items() if k != "wear"})
+    assert diagnose(plain)[0] == "mindlin_deresiewicz"

@@ -20,7 +20,8 @@ Pipeline file::
     reference = "closed_form"      # default; or an archive path; or "none" (no compare)
     [plot]                         # optional
     figures = ["profiles", "hysteresis", "radii", "sweep"]    # default: all four
-    variables = ["contact_area"]   # what the sweep overlay shows (default contact_area)
+    variables = ["contact_area"]   # what the sweep overlay shows (default contact_area;
+                                   # a wear run's worn_volume... against cycle)
     [stress]                       # optional: the subsurface stress of every member
     depths = [0.0, 1e-4, 2e-4]     # m, >= 0; or {max = 1e-3, count = 11} (min = 0)
     body = "halfspace"             # or "indenter"
@@ -49,7 +50,8 @@ Outputs, in ``out``
 ``compare/<digest>.nc``
     Per member error table (:func:`contactpipe.pipeline.compare.compare`).
 ``figures/<digest>-<kind>.png``
-    Per member figures (``profiles``, ``hysteresis``, ``radii``).
+    Per member figures (``profiles``, ``hysteresis``, ``radii``, ``maps``, and ``wear``
+    for a wear run).
 ``figures/sweep-<variable>.png``
     The members overlaid (:func:`contactpipe.pipeline.figures.plot.plot_sweep`).
 ``stress/<digest>.nc``, ``figures/<digest>-stress.png``

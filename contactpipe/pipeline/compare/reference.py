@@ -4,7 +4,8 @@
 scene), :func:`diagnose` also says why each other candidate does not, and
 :func:`closed_form_solution` builds the :class:`ClosedForm` that the comparison
 (:mod:`contactpipe.pipeline.compare`) and the figures (:mod:`contactpipe.pipeline.figures.plot`)
-draw on. All formulae come from :mod:`contactpipe.analytic`.
+draw on. All formulae come from :mod:`contactpipe.analytic`. A scene with ``[wear]`` admits
+none: its archive holds the last cycle of a worn contact.
 
 ``hertz``
     sphere or ellipsoid, both bodies elastic or rigid, no shear (mu = 0, or no tangential
@@ -96,6 +97,13 @@ def _program_facts(scene) -> dict:
             "tilt": any(tilt), "twist": twist, "twist_rotation": not p.is_force(5) and twist}
 
 
+def _worn() -> dict:
+    """Why no closed form applies to a wear run: the worn surface changes the geometry
+    cycle by cycle, and the archive holds the last cycle of the life."""
+    return {name: ["needs no [wear] (the worn geometry changes cycle by cycle)"]
+            for name in CLOSED_FORMS}
+
+
 def diagnose(scene) -> tuple[str | None, dict]:
     """The closed form a scene admits, and for each candidate why it does not apply.
 
@@ -107,6 +115,8 @@ def diagnose(scene) -> tuple[str | None, dict]:
         ``{candidate: [reasons]}`` for each candidate tried before ``name`` (all of them
         when ``name`` is None): what the scene would need to admit it.
     """
+    if getattr(scene, "wear", None) is not None:
+        return None, _worn()
     b1, b2, t, W, T1, T2 = _load_facts(scene)
     f = _program_facts(scene)
     shape = scene.geometry.shape

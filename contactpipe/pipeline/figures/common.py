@@ -100,8 +100,11 @@ def has_tangential_load(ds) -> bool:
 
 
 def figure_applies(kind: str, ds) -> bool:
-    """Whether the figure ``kind`` (one of :data:`KINDS`) applies to an archive: the
-    fretting loop needs a tangential load, the others always apply."""
+    """Whether the figure ``kind`` (one of :data:`KINDS`, or ``wear``) applies to an
+    archive: the fretting loop needs a tangential load, the wear figure a wear run (a
+    ``cycle`` dimension), the others always apply."""
+    if kind == "wear":
+        return "cycle" in ds.dims
     return has_tangential_load(ds) if kind == "hysteresis" else True
 
 

@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 
 from ...exceptions import ArchiveError
-from ...nomenclature import VARIABLES
+from ...nomenclature import HISTORY, VARIABLES
 from .canvas import axes_of
 from .common import _opened
 
@@ -15,7 +15,7 @@ __all__ = ["plot_sweep"]
 
 # --------------------------------------------------------------------------- sweeps
 
-BASE_DIMS = ("time", "t_norm", "x1", "x2")
+BASE_DIMS = ("time", "t_norm", "cycle", "x1", "x2")
 MAX_LEGEND = 20             # more members than this: no legend
 
 
@@ -41,7 +41,7 @@ def _value_text(v):
 
 
 #: SI units shown in a unit of the contact's size: (factor to multiply by, label).
-DISPLAY_UNITS = {"m2": (1e6, "mm²"), "m": (1e6, "µm"), "J": (1e6, "µJ"),
+DISPLAY_UNITS = {"m2": (1e6, "mm²"), "m3": (1e9, "mm³"), "m": (1e6, "µm"), "J": (1e6, "µJ"),
                  "Pa": (1e-6, "MPa"), "N m": (1e3, "N mm")}
 
 
@@ -51,7 +51,7 @@ def _display_unit(units):
 
 
 def _axis_labels(ax, sw, variable, xname, reduced):
-    known = VARIABLES.get(variable, {})
+    known = VARIABLES.get(variable) or HISTORY.get(variable, {})
     units = sw[variable].attrs.get("units", known.get("units", ""))
     long = sw[variable].attrs.get("long_name", known.get("long_name", variable))
     unit = _display_unit(units)[1]
@@ -75,7 +75,9 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
         one dimension per swept parameter; the dimensions beyond time/t_norm/x1/x2 are
         looped over (all their combinations).
     variable : str
-        A series (over time). A field is reduced to its largest value over x1, x2.
+        A series (over time, or over cycle for a wear run: then drawn against cycle, each
+        member at the cycles it recorded). A field is reduced to its largest value over
+        x1, x2.
         Shown at the contact's scale (:data:`DISPLAY_UNITS`: an area in mm², a length in
         µm, an energy in µJ, a stress in MPa), labelled by its long name and unit.
     x : str
@@ -103,11 +105,13 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
             da = da.max(reduced)
         has_t_norm = "t_norm" in sw.coords or "t_norm" in sw.dims
         xname = "t_norm" if (x == "time" and has_t_norm) else x
+        if x == "time" and "cycle" in da.dims:
+            xname = "cycle"
         if xname not in sw.coords and xname not in sw.dims and xname not in sw:
             raise ArchiveError(f"x = {x!r} is not a coordinate of the sweep")
         extra = [d for d in da.dims if d not in BASE_DIMS]
         factor = _display_unit(sw[variable].attrs.get(
-            "units", VARIABLES.get(variable, {}).get("units", "")))[0]
+            "units", (VARIABLES.get(variable) or HISTORY.get(variable, {})).get("units", "")))[0]
         fig, ax = axes_of(ax)
         combos = list(itertools.product(*[range(da.sizes[d]) for d in extra])) \
             if extra else [()]
@@ -122,9 +126,13 @@ def plot_sweep(sw, variable="contact_area", x="time", *, ax=None):
             if xv.size != yv.size:
                 raise ArchiveError(f"x = {xname!r} does not run along {variable!r} "
                                    f"({xv.size} values against {yv.size})")
+            kept = np.isfinite(yv)      # a wear sweep: each member at its own records
+            xv, yv = xv[kept], yv[kept]
             ax.plot(xv, yv, "-", marker="o" if yv.size <= 30 else None, ms=3, lw=1.2,
                     color=f"C{n % 10}", label=_member_label(sw, sel))
         _axis_labels(ax, sw, variable, xname, reduced)
+        if xname == "cycle" and float(sw["cycle"].max()) > 10 * max(float(sw["cycle"].min()), 1):
+            ax.set_xscale("log")
         ax.ticklabel_format(axis="y", useOffset=False)
         ax.grid(True, lw=0.3, alpha=0.5)
         if len(combos) <= MAX_LEGEND:

@@ -55,7 +55,7 @@ import numpy as np
 
 from ..._util.files import read_toml
 from ...exceptions import SceneError
-from ...nomenclature import SERIES, VARIABLES
+from ...nomenclature import CYCLE_SERIES, HISTORY, SERIES, VARIABLES
 from ...post.fatigue import CRITERIA
 from ...post.stress import BODIES, MAX_DEPTH_SIDES
 from ...scene import Scene
@@ -71,7 +71,7 @@ __all__ = ["SweepFile", "PipelineSpec", "StressSpec", "read_sweep_file", "load_s
            "CONSTANT_FIELDS", "STRESS_CRITERIA", "MAX_AXIS_DEPTH", "MAX_DEPTHS"]
 
 CLOSED_FORM = "closed_form"
-MEMBER_FIGURES = ("profiles", "hysteresis", "radii", "maps")
+MEMBER_FIGURES = ("profiles", "hysteresis", "radii", "maps", "wear")
 FIGURES = MEMBER_FIGURES + ("sweep",)
 DEFAULT_FIGURES = ("profiles", "hysteresis", "radii", "sweep")
 #: How deep an axis value may nest (a list of [T1, T2] pairs is 2 deep).
@@ -522,11 +522,13 @@ def _read_plot(r: Reader, problems: list):
     v = p.value(PLOT_FIELDS[1])
     if v is not None:
         v = (v,) if isinstance(v, str) else v
-        series = [k for k, e in VARIABLES.items() if e["dims"] == SERIES]
+        series = [k for k, e in VARIABLES.items() if e["dims"] == SERIES] + \
+            [k for k, e in HISTORY.items() if e["dims"] == CYCLE_SERIES]
         bad = [x for x in v if x not in series]
         if bad:
-            problems.append(f"plot.variables: {', '.join(map(repr, bad))} is not a time "
-                            f"series of the archive; allowed: {', '.join(series)}")
+            problems.append(f"plot.variables: {', '.join(map(repr, bad))} is not a series "
+                            f"of the archive (over time, or over cycle for a wear run); "
+                            f"allowed: {', '.join(series)}")
         variables = tuple(v)
     return figures, variables
 
