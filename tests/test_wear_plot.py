@@ -81,3 +81,8 @@ def test_cli_draws_a_wear_run(tmp_path, capsys):
     check_png(tmp_path / "w.png")
     fig = plot.plot_wear(archive)
     assert [ln.get_label() for ln in fig.get_axes()[2].get_lines()] == ["N = 1", "N = 10"]
+    # --kind all adds the wear figure for a wear run
+    written = plot.standard_figures(archive, tmp_path / "all")
+    assert [p.name for p in written] == ["profiles.png", "maps.png", "hysteresis.png",
+                                         "radii.png", "wear.png"]
+    check_png(written[-1])
