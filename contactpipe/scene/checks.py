@@ -36,12 +36,38 @@ def check_scene(p: dict, problems: list):
         time = _resolve_time(p, problems)
         _check_step_start_stability(p, time, problems)
         _check_grid(p, problems)
+        _check_periodic(p, problems)
         if not problems:
             _check_friction_map(p, problems)
             _check_tilts(p, problems)
             _check_reach(p, problems)
             _check_twist(p, problems)
     return time
+
+
+#: Freedoms without meaning on one period of an infinite surface, and why.
+_PERIODIC_REFUSED = {
+    "moment1": "a tilt's gap -phi1 x2 is not periodic, and a moment about the period's "
+               "centre has no meaning on an infinite surface",
+    "moment2": "a tilt's gap -phi2 x1 is not periodic, and a moment about the period's "
+               "centre has no meaning on an infinite surface",
+    "moment3": "a twist's slip (-phi3 x2, phi3 x1) is not periodic",
+    "rotation1": "a tilt's gap -phi1 x2 is not periodic",
+    "rotation2": "a tilt's gap -phi2 x1 is not periodic",
+    "rotation3": "a twist's slip (-phi3 x2, phi3 x1) is not periodic",
+}
+
+
+def _check_periodic(p, problems):
+    """A periodic grid (one period of an infinite surface) has no rotations: the moments
+    and rotations of the load are refused, one line each naming the key."""
+    grid, load = p["grid"], p["load"]
+    if grid is None or load is None or not grid.periodic:
+        return
+    for key, why in _PERIODIC_REFUSED.items():
+        if getattr(load, key) is not None:
+            problems.append(f"load.{key} is not allowed with grid.boundary = 'periodic': "
+                            f"{why}; remove load.{key} (the rotations stay at 0)")
 
 
 def _check_bodies(p, problems):
@@ -205,6 +231,8 @@ def _check_reach(p, problems):
     geo, grid, load = p["geometry"], p["grid"], p["load"]
     if geo is None or grid is None or load is None or grid.size_check is False:
         return
+    if grid.periodic:
+        return                  # no edge: the contact may cross the period's sides
     if geo.shape == "surface" or p["indenter"] is None or p["halfspace"] is None:
         return
     if geo.shape == "flat_punch" and grid.size == "auto":
@@ -359,7 +387,8 @@ def _check_grid(p, problems):
     elif geo.shape == "surface":
         found = _geometry.check_surface(geo.file, *grid.coordinates())
         problems.extend(found)
-        if not found and load is not None and grid.size_check is not False:
+        if (not found and load is not None and grid.size_check is not False
+                and not grid.periodic):
             _check_surface_reach(geo, grid, load, problems)
 
 

@@ -42,6 +42,8 @@ FFT_BACKENDS = ("auto", "pyfftw", "scipy")
 ACCURACIES = ("fast", "balanced", "accurate")
 PRECISIONS = ("float64", "float32")
 MIN_POINTS, MAX_POINTS = 8, 4096
+#: grid.boundary: a non-periodic half-space (DC-FFT, padded) or one period of a surface
+BOUNDARIES = ("free", "periodic")
 #: Side lengths a grid may have [m]: a nanometre to a kilometre. Far outside, a cell's
 #: area underflows to 0 or its inverse square overflows, and no contact lives there.
 MIN_SIDE, MAX_SIDE = 1e-9, 1e3
@@ -423,11 +425,17 @@ class Grid(Part):
         inside a given size is refused (:func:`contactpipe.scene.contact_reach`). False:
         no such check; the run stops with a GridError at the step whose contact reaches
         the edge. True is stored as absent.
+    boundary : {"free", "periodic"}, optional
+        "free" (the default, stored as absent): a non-periodic half-space, convolved by
+        DC-FFT with zero padding. "periodic": the grid is one period of an infinite
+        surface (plain FFT convolution, no padding; the normal force W is the force on
+        one period; docs/conventions.md, "Periodic contact").
     """
 
     points: tuple
     size: tuple | str
     size_check: bool | None = None
+    boundary: str | None = None
 
     PATH = "grid"
     FIELDS = (
@@ -439,6 +447,7 @@ class Grid(Part):
               ok=lambda x: MIN_SIDE <= x <= MAX_SIDE, length=2, options=("auto",),
               required=True, unit="m"),
         Field("size_check", "bool"),
+        Field("boundary", "choice", options=BOUNDARIES),
     )
 
     @classmethod
@@ -446,7 +455,19 @@ class Grid(Part):
         grid = super().read(raw, path, problems)
         if grid is not None and grid.size_check is True:
             object.__setattr__(grid, "size_check", None)      # the default, stored absent
+        if grid is not None and grid.boundary == "free":
+            object.__setattr__(grid, "boundary", None)        # the default, stored absent
+        if grid is not None and grid.periodic and any(n % 2 for n in grid.points):
+            problems.append(f"{path}.points = {list(grid.points)} must be even numbers for "
+                            f"{path}.boundary = 'periodic' (the real FFT of one period, "
+                            f"and its coarse grids, halve each side)")
+            return None
         return grid
+
+    @property
+    def periodic(self) -> bool:
+        """The grid is one period of an infinite surface (``boundary = "periodic"``)."""
+        return self.boundary == "periodic"
 
     def _size(self):
         if self.size == "auto":

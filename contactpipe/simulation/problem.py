@@ -69,6 +69,8 @@ class Grid:
         self.cell = self.d1 * self.d2
         self.gap = np.asarray(scene.geometry.gap(self.x1, self.x2), dtype=float)
         self.mu = scene.friction.on_grid(self.x1, self.x2)      # a float, or a map
+        #: one period of an infinite surface (grid.boundary = "periodic")
+        self.periodic = bool(getattr(scene.grid, "periodic", False))
         self.X1, self.X2 = np.meshgrid(self.x1, self.x2, indexing="ij")
 
     def twist(self):
@@ -84,11 +86,12 @@ class Operators:
     def __init__(self, bodies, grid: Grid, plan, dt, instants, backend, nthreads):
         self.bodies, self.plan, self.dt, self.shape = bodies, plan, dt, grid.shape
         n1, n2 = grid.shape
+        per = grid.periodic
         # extreme constants may overflow the kernels: harmless here, refused by Problem
         with np.errstate(over="ignore", invalid="ignore"):
-            spectra = [body_spectra_parts(b, n1, n2, grid.d1, grid.d2, backend, nthreads)
-                       for b in bodies]
-            self.conv = convolver(n1, n2, backend, int(nthreads))
+            spectra = [body_spectra_parts(b, n1, n2, grid.d1, grid.d2, backend, nthreads,
+                                          periodic=per) for b in bodies]
+            self.conv = convolver(n1, n2, backend, int(nthreads), periodic=per)
             fresh = self.new_memories()
             self.spectra = spectra
             self._operators = {}

@@ -35,7 +35,8 @@ _PLAN_LOCK = threading.Lock()
 
 
 class Convolver:
-    """Linear convolution on an ``n1 x n2`` grid by DC-FFT on a ``2n1 x 2n2`` padded grid.
+    """Linear convolution on an ``n1 x n2`` grid by DC-FFT on a ``2n1 x 2n2`` padded grid
+    (or, ``periodic``, circular convolution on the grid itself).
 
     Parameters
     ----------
@@ -45,6 +46,11 @@ class Convolver:
         FFT library; "auto" takes pyFFTW when installed.
     threads : int
         Threads given to the FFT library.
+    periodic : bool
+        The grid is one period of an infinite surface: a circular convolution on the grid
+        itself, not padded (the kernel spectra then come from
+        :mod:`~contactpipe.solver.periodic`; the same pruned plans serve, with nothing
+        pruned).
     planner : str
         pyFFTW planner effort ("FFTW_ESTIMATE", "FFTW_MEASURE", ...). Planning happens once,
         here, and its time is recorded in :attr:`plan_time_s`. Measured plans start from,
@@ -63,10 +69,12 @@ class Convolver:
     """
 
     def __init__(self, n1: int, n2: int, backend: str = "auto", threads: int = 1,
-                 planner: str = "FFTW_MEASURE"):
+                 planner: str = "FFTW_MEASURE", periodic: bool = False):
         import time
         self.n1, self.n2 = int(n1), int(n2)
-        self.m1, self.m2 = 2 * self.n1, 2 * self.n2
+        self.periodic = bool(periodic)
+        pad = 1 if self.periodic else 2
+        self.m1, self.m2 = pad * self.n1, pad * self.n2
         self.spec_shape = (self.m1, self.m2 // 2 + 1)
         if backend == "auto":
             backend = "pyfftw" if HAVE_PYFFTW else "scipy"

@@ -20,6 +20,7 @@ import scipy.fft
 from .blocks import BlockOperator
 from .convolution import Convolver
 from .influence import body_kernel_parts, body_kernels, pair_kernels
+from .periodic import periodic_body_spectra, periodic_part_spectra
 from .symbols import plane_model, radial_profile, root_laplacian
 
 __all__ = ["BodySpectra", "ContactOperator", "body_spectra", "body_spectra_parts",
@@ -46,14 +47,19 @@ class BodySpectra(dict):
 
 
 @lru_cache(maxsize=16)
-def _body_spectra_cached(n1, n2, d1, d2, young, poisson, backend, threads):
+def _body_spectra_cached(n1, n2, d1, d2, young, poisson, backend, threads, periodic=False):
+    if periodic:
+        return BodySpectra.on(periodic_body_spectra(n1, n2, d1, d2, young, poisson), (d1, d2))
     conv = convolver(n1, n2, backend, threads)
     kernels = body_kernels(n1, n2, d1, d2, young, poisson)
     return BodySpectra.on({k: conv.kernel_spectrum(v) for k, v in kernels.items()}, (d1, d2))
 
 
 @lru_cache(maxsize=8)
-def _part_spectra_cached(n1, n2, d1, d2, shear_modulus, backend, threads):
+def _part_spectra_cached(n1, n2, d1, d2, shear_modulus, backend, threads, periodic=False):
+    if periodic:
+        return tuple(BodySpectra.on(part, (d1, d2))
+                     for part in periodic_part_spectra(n1, n2, d1, d2, shear_modulus))
     conv = convolver(n1, n2, backend, threads)
     return tuple(BodySpectra.on({k: conv.kernel_spectrum(v) for k, v in part.items()},
                                 (d1, d2))
@@ -61,29 +67,33 @@ def _part_spectra_cached(n1, n2, d1, d2, shear_modulus, backend, threads):
 
 
 @lru_cache(maxsize=8)
-def convolver(n1, n2, backend="auto", threads=1, planner="FFTW_MEASURE"):
-    """The process's DC-FFT engine for an n1 x n2 grid (FFT plans made once, then reused)."""
-    return Convolver(n1, n2, backend=backend, threads=threads, planner=planner)
+def convolver(n1, n2, backend="auto", threads=1, planner="FFTW_MEASURE", periodic=False):
+    """The process's DC-FFT engine for an n1 x n2 grid (FFT plans made once, then reused);
+    ``periodic``: the circular convolution of a periodic grid, unpadded."""
+    return Convolver(n1, n2, backend=backend, threads=threads, planner=planner,
+                     periodic=periodic)
 
 
-def body_spectra(body, n1, n2, d1, d2, backend="auto", threads=1):
-    """Spectra of one body's nine kernels, or None for a rigid body (cached)."""
+def body_spectra(body, n1, n2, d1, d2, backend="auto", threads=1, periodic=False):
+    """Spectra of one body's nine kernels, or None for a rigid body (cached); ``periodic``:
+    those of the periodic grid (:mod:`~contactpipe.solver.periodic`)."""
     if body.rigid:
         return None
     return _body_spectra_cached(int(n1), int(n2), float(d1), float(d2), float(body.young),
-                                float(body.poisson), backend, int(threads))
+                                float(body.poisson), backend, int(threads), bool(periodic))
 
 
-def body_spectra_parts(body, n1, n2, d1, d2, backend="auto", threads=1):
+def body_spectra_parts(body, n1, n2, d1, d2, backend="auto", threads=1, periodic=False):
     """The spectra of a body's kernel parts, one per creep function of
     ``body.part_creeps`` (cached): ``(body_spectra(...),)`` for a constant Poisson ratio,
     (shear part, Poisson part) when it varies in time; None for a rigid body."""
     if body.rigid:
         return None
     if not body.split:
-        return (body_spectra(body, n1, n2, d1, d2, backend, threads),)
+        return (body_spectra(body, n1, n2, d1, d2, backend, threads, periodic),)
     return _part_spectra_cached(int(n1), int(n2), float(d1), float(d2),
-                                float(body.shear_modulus), backend, int(threads))
+                                float(body.shear_modulus), backend, int(threads),
+                                bool(periodic))
 
 
 def weighted_spectra(parts, weights):
@@ -236,7 +246,7 @@ class ContactOperator:
         if name not in self._derived:
             conv = self.conv
             k = self._kernels()[key]
-            value = float(np.real(k[conv.n1, conv.n2])) * conv.m1 * conv.m2
+            value = float(np.real(k[conv.m1 // 2, conv.m2 // 2])) * conv.m1 * conv.m2
             if not value > 0.0:
                 value = self.self_influence(key)
             self._derived[name] = value * float(self._root_laplacian().max())
@@ -247,7 +257,8 @@ class ContactOperator:
         (:func:`~contactpipe.solver.symbols.radial_profile`, from K33; cached)."""
         if "radial" not in self._derived:
             conv = self.conv
-            sampled = self._kernels()["33"][::2, ::2] * (conv.m1 * conv.m2)
+            step1, step2 = conv.m1 // conv.n1, conv.m2 // conv.n2
+            sampled = self._kernels()["33"][::step1, ::step2] * (conv.m1 * conv.m2)
             self._derived["radial"] = radial_profile(sampled, self.corner("33"),
                                                      self._root_laplacian())
         return self._derived["radial"]
@@ -264,7 +275,8 @@ class ContactOperator:
         if "plane" not in self._derived:
             conv = self.conv
             self._derived["plane"] = plane_model(self._kernels()["11"], self.corner("11"),
-                                                 conv.n1, conv.n2, self.cell)
+                                                 conv.n1, conv.n2, self.cell,
+                                                 periodic=conv.periodic)
         return self._derived["plane"]
 
     def normal_preconditioner(self):
@@ -399,18 +411,22 @@ class ContactOperator:
             return None
         c1, c2 = conv.n1 // 2, conv.n2 // 2
         fine = self._in_space("33")
-        d1, d2 = np.arange(-(c1 - 1), c1), np.arange(-(c2 - 1), c2)
+        if conv.periodic:           # every offset of the coarse period, taken mod the fine
+            d1, d2 = np.arange(c1), np.arange(c2)
+        else:
+            d1, d2 = np.arange(-(c1 - 1), c1), np.arange(-(c2 - 1), c2)
         acc = np.zeros((d1.size, d2.size))
         for e1 in (-1, 0, 1):
             for e2 in (-1, 0, 1):
                 w = (2 - abs(e1)) * (2 - abs(e2)) / 4.0
                 acc += w * fine[np.ix_((2 * d1 + e1) % conv.m1, (2 * d2 + e2) % conv.m2)]
-        kernel = np.zeros((2 * c1, 2 * c2))
-        kernel[np.ix_(d1 % (2 * c1), d2 % (2 * c2))] = acc
+        pad = 1 if conv.periodic else 2
+        kernel = np.zeros((pad * c1, pad * c2))
+        kernel[np.ix_(d1 % (pad * c1), d2 % (pad * c2))] = acc
         # FFTW_ESTIMATE: a coarse grid serves a few dozen transforms of a cold start;
         # measured plans cost more to make than they saved (docs/design-choices.md, D5)
         coarse = self._derived_on(convolver(c1, c2, conv.backend, conv.threads,
-                                            "FFTW_ESTIMATE"),
+                                            "FFTW_ESTIMATE", conv.periodic),
                                   None if self.cell is None else
                                   (2.0 * self.cell[0], 2.0 * self.cell[1]))
         coarse.k = {"33": coarse.conv.kernel_spectrum(kernel)}

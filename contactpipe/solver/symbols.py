@@ -109,15 +109,23 @@ class PlaneModel:
                                 + 2.0 * self.cs * e0 * e1)
 
 
-def plane_model(k11_padded, corner11, n1, n2, cell) -> PlaneModel:
+def plane_model(k11_padded, corner11, n1, n2, cell, periodic=False) -> PlaneModel:
     """The in-plane model of a grid from its padded K11 spectrum (``k11_padded``, scaled
     as the operator keeps it: the inverse FFT's 1/(m1 m2) folded in) and its value at the
-    Nyquist corner times σ there, ``corner11`` [1/Pa]."""
+    Nyquist corner times σ there, ``corner11`` [1/Pa]. ``periodic``: the spectrum is the
+    unpadded one of a periodic grid, whose kernel in real space has no point-load tail;
+    ν_e is then read from the spectrum at the lowest frequency along each axis, where
+    K̂11 |ξ| is λ_F (1 − ν_e) along x1 and λ_F along x2."""
     d1, d2 = cell if cell is not None else (1.0, 1.0)
-    m1, m2 = 2 * n1, 2 * n2
+    m1, m2 = (n1, n2) if periodic else (2 * n1, 2 * n2)
     R = min(16, n1 // 4, n2 // 4)
     nu = 0.0
-    if R >= 2:      # one inverse transform, set-up work; not the operator's kept kernels
+    if periodic:
+        along = float(np.real(k11_padded[1, 0])) * (2.0 * np.pi / (n1 * d1))
+        across = float(np.real(k11_padded[0, 1])) * (2.0 * np.pi / (n2 * d2))
+        if along > 0.0 and across > 0.0:
+            nu = float(np.clip(1.0 - along / across, 0.0, 0.5))
+    elif R >= 2:    # one inverse transform, set-up work; not the operator's kept kernels
         k11 = scipy.fft.irfft2(k11_padded * (m1 * m2), s=(m1, m2))
         along, across = float(k11[R, 0]) * d1, float(k11[0, R]) * d2
         if along > 0.0 and across > 0.0:

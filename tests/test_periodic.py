@@ -1,0 +1,265 @@
+"""Periodic contact (grid.boundary = "periodic"): the periodic influence coefficients, the
+closed forms of wavy surfaces (Westergaard's sinusoid; Johnson, Greenwood & Higginson's
+bisinusoid in full contact), full stick of identical bodies with nu = 0, and the freedoms
+refused on a periodic cell."""
+import numpy as np
+import pytest
+
+import contactpipe as cp
+from contactpipe.solver.convolution import Convolver
+from contactpipe.solver.influence import cell_influence
+from contactpipe.solver.normal import solve_normal
+from contactpipe.solver.operator import ContactOperator, body_spectra, convolver
+from contactpipe.solver.periodic import (
+    BASES,
+    _angles,
+    alias_sum,
+    periodic_bases,
+    periodic_body_spectra,
+    periodic_kernels,
+)
+
+E, NU = 1e11, 0.3
+
+
+def _surface_scene(tmp_path, gap, size, load, halfspace=None, indenter=None, **over):
+    f = tmp_path / "gap.npy"
+    np.save(f, gap)
+    d = dict(geometry={"shape": "surface", "file": str(f)},
+             indenter=indenter or {"material": "rigid"},
+             halfspace=halfspace or {"material": "elastic", "young": E, "poisson": NU},
+             load=load,
+             grid={"points": list(gap.shape), "size": list(size), "boundary": "periodic"},
+             solver={"tolerance": 1e-10})
+    d.update(over)
+    return cp.Scene(**d)
+
+
+@pytest.mark.parametrize("n1, n2, d2", [(32, 32, 1.0), (16, 32, 0.5), (64, 8, 1.0)])
+def test_alias_sums_match_the_direct_sum(n1, n2, d2):
+    """The interpolated remainder of the alias sums agrees with the direct sum over
+    |a| <= 128 (outer shell halved; its own error ~2e-9) within 3e-7 of each basis's
+    largest value, on square and 1 x 2 cells."""
+    t1, t2 = _angles(n1, n2)
+    ref = alias_sum(t1, t2, 1.0, d2, 128)
+    got = periodic_bases(n1, n2, 1.0, d2)
+    for b in BASES:
+        r = ref[b].copy()
+        r[0, 0] = 0.0
+        if b in ("12", "1"):
+            r[n1 // 2, :] = 0.0
+        if b in ("12", "2"):
+            r[:, -1] = 0.0
+        assert np.abs(got[b] - r).max() <= 3e-7 * np.abs(r).max(), b
+
+
+def _image_sum(n, d, images, key):
+    """Σ over |m1|, |m2| <= images of K(x + m L) − K(m L), x the wrapped offsets."""
+    L = n * d
+    x = np.arange(n) * d
+    x[x >= L / 2] -= L
+    acc = np.zeros((n, n))
+    for a in range(-images, images + 1):
+        for b in range(-images, images + 1):
+            k = cell_influence(x[:, None] + a * L, x[None, :] + b * L, d, d, 1.0, NU)[key]
+            acc += k - cell_influence(np.array(a * L), np.array(b * L), d, d, 1.0, NU)[key]
+    return acc, x
+
+
+@pytest.mark.parametrize("key", ["33", "11", "12", "13"])
+def test_periodic_kernels_are_the_image_sums(key):
+    """The spectral kernels are the sums of the free-space rectangle kernels over the
+    periodic images (8 x 8 grid): the square image sums, extrapolated in the number of
+    image shells M (2 S(16) − S(8), their error ~1/M), agree with K(x) − K(0) within
+    1.5e-4 of the kernel's largest value (6e-4 for K12, whose sums converge slowest).
+    The coupling kernels' square sums converge to the periodic kernel plus the uniform
+    field (1−2ν)(1+ν)/(2E) x1/n² that the zero mode (a neutral background) removes."""
+    n, d = 8, 1.0
+    per = periodic_kernels(n, n, d, d, 1.0, NU)[key]
+    s8, x = _image_sum(n, d, 8, key)
+    s16, _ = _image_sum(n, d, 16, key)
+    ref = per - per[0, 0]
+    if key == "13":
+        ref = ref - (1 - 2 * NU) * (1 + NU) / 2.0 * x[:, None] / n ** 2
+    tol = 6e-4 if key == "12" else 1.5e-4
+    assert np.abs(2 * s16 - s8 - ref).max() <= tol * np.abs(per).max()
+    assert np.abs(s16 - ref).max() < np.abs(s8 - ref).max()          # converging
+
+
+@pytest.mark.parametrize("backend", ["scipy", "pyfftw"])
+def test_periodic_convolver_is_circular(backend):
+    """The unpadded convolver computes the circular convolution (direct sum, 12 x 10)."""
+    if backend == "pyfftw":
+        pytest.importorskip("pyfftw")
+    rng = np.random.default_rng(3)
+    n1, n2 = 12, 10
+    k, x = rng.standard_normal((n1, n2)), rng.standard_normal((n1, n2))
+    conv = Convolver(n1, n2, backend=backend, periodic=True, planner="FFTW_ESTIMATE")
+    got = conv.convolve(conv.kernel_spectrum(k), x)
+    i1, i2 = np.arange(n1), np.arange(n2)
+    ref = np.zeros((n1, n2))
+    for a in range(n1):
+        for b in range(n2):
+            ref += x[a, b] * k[np.ix_((i1 - a) % n1, (i2 - b) % n2)]
+    np.testing.assert_allclose(got, ref, atol=1e-12 * np.abs(ref).max())
+
+
+def test_westergaard_sinusoid(tmp_path):
+    """Westergaard (1939): a rigid flat on an elastic wavy surface of amplitude Δ and
+    wavelength λ, x2-invariant, on a periodic 512 x 8 grid over one wavelength, at
+    p̄ = 0.3 p*, p* = π E* Δ/λ. The contact half-width from p̄ = p* sin²(πa/λ) is met
+    within one cell; the pressure p = (2p̄/sin²(πa/λ)) cos(πx/λ) √(sin²(πa/λ) − sin²(πx/λ))
+    within 1e-4 of its peak at the peak, 2e-3 of it in RMS over the grid, and 5e-3 at
+    every cell more than two cells inside the contact's edge; the field does not vary
+    along x2; the mean gap is mean(h0) − ω3 (the displacement has zero mean)."""
+    n1, n2, lam, delta = 512, 8, 1e-3, 1e-6
+    d = lam / n1
+    e_star = E / (1 - NU ** 2)
+    p_star = np.pi * e_star * delta / lam
+    x1 = -lam / 2 + (np.arange(n1) + 0.5) * d
+    gap = np.repeat((delta * (1 - np.cos(2 * np.pi * x1 / lam)))[:, None], n2, axis=1)
+    p_bar = 0.3 * p_star
+    ds = cp.simulate(_surface_scene(tmp_path, gap, (lam, n2 * d),
+                                    {"time": [0.0], "normal_force": p_bar * lam * n2 * d}))
+    p2 = ds.p.values[0]
+    assert np.abs(p2 - p2[:, :1]).max() == 0.0
+    p = p2[:, 0]
+    s2 = p_bar / p_star
+    a = lam / np.pi * np.arcsin(np.sqrt(s2))
+    ref = np.where(np.abs(x1) < a, 2 * p_bar / s2 * np.cos(np.pi * x1 / lam)
+                   * np.sqrt(np.clip(s2 - np.sin(np.pi * x1 / lam) ** 2, 0, None)), 0.0)
+    assert abs(np.count_nonzero(p > 0) * d / 2 - a) <= d
+    assert abs(p.max() / ref.max() - 1) <= 1e-4
+    assert np.sqrt(np.mean((p - ref) ** 2)) <= 2e-3 * ref.max()
+    inside = np.abs(x1) < a - 2 * d
+    assert np.abs(p - ref)[inside].max() <= 5e-3 * ref.max()
+    assert ds.h.values[0].mean() == pytest.approx(delta - float(ds.omega3[0]), rel=1e-9)
+    assert abs(ds.u3.values[0].mean()) <= 1e-12 * np.abs(ds.u3.values[0]).max()
+
+
+@pytest.mark.parametrize("ratio", [1.05, 0.97])
+def test_bisinusoid_full_contact(tmp_path, ratio):
+    """Johnson, Greenwood & Higginson (1985): z = Δ cos(2πx1/λ) cos(2πx2/λ) is in full
+    contact for p̄ >= p* = √2 π E* Δ/λ, under p = p̄ + p* cos cos (64 x 64 cells over one
+    wavelength). At 1.05 p* every cell is in contact, the pressure is the linear
+    full-contact solution on the grid within 1e-12 p*, and its amplitude is p* within
+    2e-3 (the piecewise-constant discretisation: 7.6e-4 here); at 0.97 p* the contact
+    is not full."""
+    n, lam, delta = 64, 1e-3, 1e-7
+    d = lam / n
+    e_star = E / (1 - NU ** 2)
+    p_star = np.sqrt(2) * np.pi * e_star * delta / lam
+    x = -lam / 2 + (np.arange(n) + 0.5) * d
+    cc = np.cos(2 * np.pi * x / lam)[:, None] * np.cos(2 * np.pi * x / lam)[None, :]
+    gap = delta * (1 - cc)
+    p_bar = ratio * p_star
+    ds = cp.simulate(_surface_scene(tmp_path, gap, (lam, lam),
+                                    {"time": [0.0], "normal_force": p_bar * lam * lam}))
+    p = ds.p.values[0]
+    if ratio < 1:
+        assert np.count_nonzero(p == 0) > 0
+        return
+    assert np.all(p > 0)
+    k33 = periodic_body_spectra(n, n, d, d, E, NU)["33"] * (n * n)
+    safe = np.where(k33 == 0, 1.0, k33)
+    linear = p_bar - np.fft.irfft2(np.fft.rfft2(gap - gap.mean()) / safe * (k33 != 0),
+                                   s=(n, n))
+    assert np.abs(p - linear).max() <= 1e-12 * p_star
+    amplitude = np.sum((p - p_bar) * cc) / np.sum(cc * cc)
+    assert amplitude == pytest.approx(p_star, rel=2e-3)
+
+
+def _rough_gap(n, rms, seed=1):
+    """A periodic random surface, power spectrum |k|^-3.6 up to a quarter of the grid's
+    frequencies, scaled to the rms height ``rms``; the gap max(z) − z."""
+    rng = np.random.default_rng(seed)
+    k = np.hypot(np.fft.fftfreq(n)[:, None], np.fft.rfftfreq(n)[None, :])
+    amp = np.where((k > 0) & (k < 0.25), np.where(k > 0, k, 1.0) ** -1.8, 0.0)
+    z = np.fft.irfft2(amp * np.exp(2j * np.pi * rng.random(amp.shape)), s=(n, n))
+    z *= rms / z.std()
+    return z.max() - z
+
+
+@pytest.mark.parametrize("nu", [0.0, 0.3])
+def test_full_stick_tangential_stiffness_equals_normal(tmp_path, nu):
+    """Identical bodies with ν = 0: K11 = K22 = K33 and no coupling, so in full stick
+    the tangential stiffness T/ω1 of a rough periodic contact (64 x 64, about 6 % of
+    the cell in contact, μ = 100, T = 1e-3 W) equals its incremental normal stiffness
+    ΔW/Δω3 (W raised by 1e-5, the contact set unchanged) within 1e-6; with ν = 0.3
+    it is stiffer normally by more than 5 % (the check tells the two apart)."""
+    n, L = 64, 1e-3
+    gap = _rough_gap(n, 1e-6)
+    body = {"material": "elastic", "young": E, "poisson": nu}
+    W = 2e-4 * E * L * L
+    sc = _surface_scene(tmp_path, gap, (L, L),
+                        {"time": [0.0, 1.0], "normal_force": W,
+                         "tangential_force": [0.0, 1e-3 * W]},
+                        halfspace=body, indenter=body, friction={"mu": 100.0},
+                        time={"steps": 1})
+    ds = cp.simulate(sc)
+    assert np.all(ds.status.values[1][ds.p.values[1] > 0] == 1)        # all stick
+    normal = cp.simulate(sc.replace({"load": {"time": [0.0, 1.0],
+                                              "normal_force": [W, W * (1 + 1e-5)]},
+                                     "friction": {"mu": 0.0}}))
+    p0, p1 = normal.p.values
+    assert np.array_equal(p0 > 0, p1 > 0)
+    k_n = 1e-5 * W / float(normal.omega3[1] - normal.omega3[0])
+    k_t = 1e-3 * W / float(ds.omega1[1] - ds.omega1[0])
+    if nu == 0.0:
+        assert k_t == pytest.approx(k_n, rel=1e-6)
+    else:
+        assert k_t < 0.95 * k_n
+
+
+def test_multilevel_start_on_a_periodic_grid():
+    """The coarse-grid start (coarsened periodic kernel) gives the plain solve's answer
+    within the tolerance (128 x 128 rough periodic contact)."""
+    n, L = 128, 1e-3
+    gap = _rough_gap(n, 1e-6, seed=2)
+    d = L / n
+    steel = cp.materials.Body("elastic", E, NU)
+    spectra = body_spectra(steel, n, n, d, d, periodic=True)
+    op = ContactOperator(spectra, None, 1.0, 0.0, convolver(n, n, periodic=True))
+    W = 1e-4 * E * L * L
+    fast = solve_normal(op, gap, W, d * d, np.zeros_like(gap), 1e-10, 5000)
+    plain = solve_normal(op, gap, W, d * d, np.zeros_like(gap), 1e-10, 5000,
+                         precondition=False, multilevel=False)
+    assert fast.converged and plain.converged
+    assert np.abs(fast.p - plain.p).max() <= 1e-7 * plain.p.max()
+    assert fast.p.sum() * d * d == pytest.approx(W, rel=1e-12)
+
+
+@pytest.mark.parametrize("key, value", [("moment1", 0.01), ("moment2", 0.01),
+                                        ("moment3", 0.01), ("rotation1", 1e-4),
+                                        ("rotation2", 1e-4), ("rotation3", 1e-4)])
+def test_periodic_refuses_rotations(key, value):
+    """Moments and rotations have no meaning on one period: one line naming the key."""
+    with pytest.raises(cp.SceneError) as err:
+        cp.Scene(geometry={"shape": "sphere", "radius": 0.01},
+                 indenter={"material": "rigid"},
+                 halfspace={"material": "elastic", "young": E, "poisson": NU},
+                 load={"time": [0.0, 1.0], "normal_force": 10.0, key: [0.0, value]},
+                 friction={"mu": 0.2},
+                 grid={"points": [32, 32], "size": [1e-3, 1e-3], "boundary": "periodic"})
+    msg = str(err.value)
+    assert f"load.{key} is not allowed with grid.boundary = 'periodic'" in msg
+    assert "\n" not in msg
+
+
+def test_periodic_grid_keys():
+    """An odd side and an unknown boundary are refused naming the key; 'free' is the
+    default and is stored as absent (the scene's identity does not change)."""
+    base = dict(geometry={"shape": "sphere", "radius": 0.01},
+                indenter={"material": "rigid"},
+                halfspace={"material": "elastic", "young": E, "poisson": NU},
+                load={"time": [0.0], "normal_force": 10.0})
+    with pytest.raises(cp.SceneError, match=r"grid\.points = \[32, 33\] must be even"):
+        cp.Scene(**base, grid={"points": [32, 33], "size": [1e-3, 1e-3],
+                               "boundary": "periodic"})
+    with pytest.raises(cp.SceneError, match=r"grid\.boundary must be one of"):
+        cp.Scene(**base, grid={"points": [32, 32], "size": [1e-3, 1e-3],
+                               "boundary": "torus"})
+    free = cp.Scene(**base, grid={"points": [32, 32], "size": [1e-3, 1e-3],
+                                  "boundary": "free"})
+    plain = cp.Scene(**base, grid={"points": [32, 32], "size": [1e-3, 1e-3]})
+    assert free.digest() == plain.digest() and "boundary" not in free.to_dict()["grid"]
