@@ -263,3 +263,46 @@ def test_periodic_grid_keys():
                                   "boundary": "free"})
     plain = cp.Scene(**base, grid={"points": [32, 32], "size": [1e-3, 1e-3]})
     assert free.digest() == plain.digest() and "boundary" not in free.to_dict()["grid"]
+
+
+def test_westergaard_viscoelastic_memory(tmp_path):
+    """A rigid wavy surface held on a Maxwell half-space (t' = 1 s) under a constant
+    mean pressure p̄ = 0.2 p*(0): Lee & Radok's rule (the contact grows, so the elastic
+    solution with the creep compliance at t holds) gives sin²(πa/λ) = p̄ φ(t)/p*(0),
+    φ = 1 + t/t'. On the periodic 256 x 8 grid with 20 steps to t = 2 s, the half-width
+    is met within 1.5 cells at t = 1 s and 2 s."""
+    n1, n2, lam, delta = 256, 8, 1e-3, 1e-6
+    d = lam / n1
+    p_star = np.pi * E / (1 - NU ** 2) * delta / lam
+    x1 = -lam / 2 + (np.arange(n1) + 0.5) * d
+    gap = np.repeat((delta * (1 - np.cos(2 * np.pi * x1 / lam)))[:, None], n2, axis=1)
+    p_bar = 0.2 * p_star
+    maxwell = {"material": "viscoelastic", "young": E, "poisson": NU, "creep": "maxwell",
+               "relaxation_time": 1.0}
+    ds = cp.simulate(_surface_scene(tmp_path, gap, (lam, n2 * d),
+                                    {"time": [0.0, 2.0], "normal_force": p_bar * lam * n2 * d},
+                                    halfspace=maxwell, time={"steps": 20}))
+    for k, t in ((10, 1.0), (20, 2.0)):
+        assert float(ds.time[k]) == pytest.approx(t)
+        a = lam / np.pi * np.arcsin(np.sqrt(p_bar * (1 + t) / p_star))
+        width = np.count_nonzero(ds.p.values[k][:, 0] > 0) * d / 2
+        assert abs(width - a) <= 1.5 * d, (t, width / d, a / d)
+
+
+def test_periodic_fretting_with_coupling_obeys_the_contact_laws(tmp_path):
+    """A rigid rough surface on steel (β ≠ 0: the normal–tangential coupling is on),
+    64 x 64 periodic, rubbed in a force-controlled loop to ±0.5 μW: every step obeys the
+    contact laws (Coulomb, complementarity, equilibrium, dissipation; to 1e-9), and the
+    loop reaches slip (cells with |q| = μp)."""
+    n, L = 64, 1e-3
+    gap = _rough_gap(n, 1e-6, seed=4)
+    W, mu = 2e-4 * E * L * L, 0.3
+    sc = _surface_scene(tmp_path, gap, (L, L),
+                        {"time": [0.0, 0.25, 0.75, 1.0], "normal_force": W,
+                         "tangential_force": [0.0, 0.5 * mu * W, -0.5 * mu * W,
+                                              0.5 * mu * W]},
+                        friction={"mu": mu}, time={"steps": 8})
+    ds = cp.simulate(sc)
+    assert "coupling=none" not in ds.attrs["models"]
+    cp.testing.assert_contact_laws(ds)
+    assert np.count_nonzero(ds.status.values[2] == 2) > 0
