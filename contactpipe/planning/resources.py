@@ -31,7 +31,9 @@ __all__ = ["Resources", "estimate_resources", "available_memory", "check_resourc
 #
 # Memory model of one run on an N1 x N2 grid (N = N1 N2 cells), in bytes, with the DC-FFT
 # padded grid of 4N reals (R = 32 N bytes) and its half spectrum of 2 N1 (N2 + 1) complex
-# values (S ~ 32 N bytes):
+# values (S ~ 32 N bytes); a periodic grid (grid.boundary = "periodic") is transformed
+# unpadded: N reals (R = 8 N) and N1 (N2/2 + 1) complex values (S ~ 8 N), 4x less per
+# transform, and its kernel spectra are built in Fourier space (no padded kernels):
 #   kernel spectra     9 S per compliant body and kernel part (cached)
 #   kernel set-up      9 R of padded kernels + their quadrant, while the spectra are made
 #   operators          9 S for the first instant's operator, 9 S for the others', 9 S per
@@ -329,8 +331,10 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     pl = plan_ if plan_ is not None else plan(scene)
     n1, n2 = (int(v) for v in scene.grid.points)
     n = n1 * n2
-    R = 4 * n * 8
-    S = 2 * n1 * (n2 + 1) * 16
+    periodic = bool(getattr(scene.grid, "periodic", False))
+    pad = 1 if periodic else 4                # a periodic grid is transformed unpadded
+    R = pad * n * 8
+    S = (n1 * (n2 // 2 + 1) if periodic else 2 * n1 * (n2 + 1)) * 16
     bodies = (scene.indenter.body(), scene.halfspace.body())
     compliant = sum(len(b.part_creeps) for b in bodies if not b.rigid)   # kernel sets
     histories = sum(b.has_memory for b in bodies) if pl.memory != "none" else 0
@@ -338,7 +342,8 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     tangential = pl.tangential != "none"
     parts = {
         "kernel spectra": 9 * S * compliant,
-        "kernel set-up": 9 * R + 2 * 9 * n * 8,
+        # periodic: the spectra are built in Fourier space (six basis symbols, two parts)
+        "kernel set-up": 2 * 9 * S + 6 * 4 * n if periodic else 9 * R + 2 * 9 * n * 8,
         "operators": 9 * S * ((2 if instants > 1 else 1) + histories),
         "FFT buffers": 2 * R + 7 * S,
         "memory fields": _memory_fields(bodies, pl.memory, instants, n),
@@ -347,7 +352,7 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
         "contact windows": _window_bytes(n1, n2, R, S),
         "base": BASE_BYTES,
     }
-    pairs, m = _fft_pairs(scene, pl, n1, n2, instants), 4 * n
+    pairs, m = _fft_pairs(scene, pl, n1, n2, instants), pad * n
     # the padded kernels of the set-up are freed before the operators are formed
     peak = parts["kernel spectra"] + parts["base"] + max(
         parts["kernel set-up"], sum(v for k, v in parts.items()
