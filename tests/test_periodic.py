@@ -330,3 +330,16 @@ def test_periodic_memory_estimate_needs_no_padding(tmp_path):
         assert ratio == pytest.approx(0.25, rel=5e-3), part
     assert est["periodic"].memory_bytes < 2 ** 30
     assert est["periodic"].memory_bytes < 0.5 * est["free"].memory_bytes
+
+
+def test_stress_stage_refuses_a_periodic_archive(tmp_path):
+    """The subsurface-stress stage's kernels are a non-periodic half-space's: the archive
+    of a periodic cell is refused before any work, with one line naming the key."""
+    n, lam = 16, 1e-3
+    x = -lam / 2 + (np.arange(n) + 0.5) * lam / n
+    gap = np.repeat((1e-7 * (1 - np.cos(2 * np.pi * x / lam)))[:, None], n, axis=1)
+    ds = cp.simulate(_surface_scene(tmp_path, gap, (lam, lam),
+                                    {"time": [0.0], "normal_force": 1.0}))
+    with pytest.raises(ValueError, match=r"grid\.boundary = 'periodic'") as err:
+        cp.subsurface_stress(ds, [1e-5])
+    assert "\n" not in str(err.value)

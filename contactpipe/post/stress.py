@@ -183,6 +183,24 @@ def _grid(ds):
     return out[0][0], out[1][0], out[0][1], out[1][1]
 
 
+def _refuse_periodic(ds):
+    """A ValueError for the archive of a periodic cell (``grid.boundary = "periodic"``):
+    this stage's kernels are a non-periodic half-space's, which would leave out the
+    stress of the tractions' periodic images."""
+    text = ds.attrs.get("scene")
+    if not isinstance(text, str):
+        return
+    try:
+        grid = loads_toml(text, "the archive's scene attribute").get("grid", {})
+    except Exception:                     # noqa: BLE001 - reported by body_poisson
+        return
+    if isinstance(grid, dict) and grid.get("boundary") == "periodic":
+        raise ValueError("the archive's scene has grid.boundary = 'periodic': subsurface "
+                         "stresses of a periodic cell are not available (this stage's "
+                         "kernels are a non-periodic half-space's and would leave out the "
+                         "stress of the periodic images)")
+
+
 def check_request(ds, x3, body="halfspace", time=None, poisson=None):
     """Check a request before any work: (time indices, depths, nu, grid).
 
@@ -210,6 +228,7 @@ def check_request(ds, x3, body="halfspace", time=None, poisson=None):
                          f"{deepest:g} m ({MAX_DEPTH_SIDES} times the grid's larger side, "
                          f"{side:g} m); below that the field is a point load's")
     idx = _time_index(ds, time)
+    _refuse_periodic(ds)
     if poisson is None:
         nu = body_poisson(ds, body)
     else:
