@@ -343,3 +343,68 @@ def test_stress_stage_refuses_a_periodic_archive(tmp_path):
     with pytest.raises(ValueError, match=r"grid\.boundary = 'periodic'") as err:
         cp.subsurface_stress(ds, [1e-5])
     assert "\n" not in str(err.value)
+
+
+def _tamaas_case(tm, n):
+    """A Tamaas self-affine surface (H = 0.8, cut-offs 4 and n/8 periods, seed 1) scaled
+    to an rms slope of 0.1 on a 1 mm period, and the mean pressure 0.005 E*."""
+    spectrum = tm.Isopowerlaw2D()
+    spectrum.q0, spectrum.q1, spectrum.q2, spectrum.hurst = 4, 4, n // 8, 0.8
+    gen = tm.SurfaceGeneratorFilter2D([n, n])
+    gen.spectrum = spectrum
+    gen.random_seed = 1
+    z = np.array(gen.buildSurface(), dtype=float)
+    k = 2 * np.pi * np.hypot(np.fft.fftfreq(n, 1e-3 / n)[:, None],
+                             np.fft.fftfreq(n, 1e-3 / n)[None, :])
+    slope = np.sqrt(np.sum(np.abs(np.fft.fft2(z)) ** 2 * k ** 2)) / (n * n)
+    return (z - z.mean()) * (0.1 / slope), 0.005 * E / (1 - NU ** 2)
+
+
+def _tamaas_solve(tm, z, p_mean, tol):
+    """(contact fraction, mean gap [m]) of Tamaas's periodic PolonskyKeerRey."""
+    n = z.shape[0]
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1e-3, 1e-3], [n, n])
+    model.E, model.nu = E, NU
+    solver = tm.PolonskyKeerRey(model, np.ascontiguousarray(z), tol)
+    solver.max_iter = 100000
+    solver.solve(p_mean)
+    p = np.array(model.traction).reshape(n, n)
+    g = np.array(model.displacement).reshape(n, n) - z
+    g -= g[p > 0].mean()                      # the gap closes on the contact
+    return float(np.mean(p > 0)), float(np.where(p > 0, 0.0, np.maximum(g, 0.0)).mean())
+
+
+def test_rough_contact_against_tamaas():
+    """One Tamaas-generated self-affine surface, 128 x 128 periodic, same mean pressure
+    (rigid flat on E = 1e11 Pa, ν = 0.3; 12.7 % in contact). Tamaas's spread between its
+    tolerances 1e-3 and 1e-8 is 1.2e-4 in contact fraction and 9e-12 m in mean gap.
+
+    - contactpipe's solver on Tamaas's kernel (2/(E*|k|) at the grid's frequencies, zero
+      mode 0), to 1e-8, gives Tamaas's contact fraction and mean gap within that spread:
+      the contact problem, the pressure control and the mean-gap convention agree;
+    - on its own kernel (cell-averaged pressures, alias sum) the contact fraction is 1.7 %
+      lower and the mean gap 0.3 % larger: the two discretisations' difference (0.9 % in
+      area at 256²), outside Tamaas's spread, and bounded here by 2.5 % and 0.5 %."""
+    tm = pytest.importorskip("tamaas")
+    tm.set_log_level(tm.LogLevel.error)
+    n = 128
+    d = 1e-3 / n
+    z, p_mean = _tamaas_case(tm, n)
+    area, gap = _tamaas_solve(tm, z, p_mean, 1e-8)
+    area_loose, gap_loose = _tamaas_solve(tm, z, p_mean, 1e-3)
+    spread_area, spread_gap = abs(area - area_loose), abs(gap - gap_loose)
+    spectra = body_spectra(cp.materials.Body("elastic", E, NU), n, n, d, d, periodic=True)
+    op = ContactOperator(None, spectra, 0.0, 1.0, convolver(n, n, periodic=True))
+    gap0 = z.max() - z
+    own = solve_normal(op, gap0, p_mean * 1e-6, d * d, np.zeros_like(z), 1e-8, 100000)
+    q = 2 * np.pi * np.hypot(np.fft.fftfreq(n, d)[:, None], np.fft.rfftfreq(n, d)[None, :])
+    symbol = np.where(q > 0, 2 * (1 - NU ** 2) / (E * np.where(q > 0, q, 1.0)), 0.0)
+    op.k = dict(op.k, **{"33": (symbol / (n * n)).astype(complex)})
+    op._derived = {}
+    theirs = solve_normal(op, gap0, p_mean * 1e-6, d * d, np.zeros_like(z), 1e-8, 100000)
+    for res, a_tol, g_tol in ((theirs, spread_area, spread_gap), (own, 0.025 * area,
+                                                                   0.005 * gap)):
+        h = np.where(res.p > 0, 0.0, np.maximum(gap0 + res.Ap - res.omega3, 0.0))
+        assert res.converged
+        assert abs(np.mean(res.p > 0) - area) <= a_tol
+        assert abs(h.mean() - gap) <= max(g_tol, 1e-9 * gap)
