@@ -62,7 +62,13 @@ def _check_periodic(p, problems):
     """A periodic grid (one period of an infinite surface) has no rotations: the moments
     and rotations of the load are refused, one line each naming the key."""
     grid, load = p["grid"], p["load"]
-    if grid is None or load is None or not grid.periodic:
+    if grid is None or not grid.periodic:
+        return
+    if grid.size == "auto":
+        problems.append("grid.size = 'auto' is not available with grid.boundary = "
+                        "'periodic': the period is part of the problem, not a margin "
+                        "around one contact; give grid.size = [L1, L2] in m")
+    if load is None:
         return
     for key, why in _PERIODIC_REFUSED.items():
         if getattr(load, key) is not None:
