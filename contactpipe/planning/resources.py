@@ -281,6 +281,16 @@ def _fft_pairs(scene, pl, n1, n2, instants) -> float:
     return per_instant * ((instants - 1) * _step_share(scene, n1, n2) + substeps)
 
 
+def _transform_bytes(scene, n1, n2):
+    """(periodic, points per cell of a transform, bytes R of its real field, bytes S of its
+    half spectrum): a periodic grid is transformed unpadded (R = 8 N, S ~ 8 N), the
+    DC-FFT grid padded to 2 N1 x 2 N2 (R = 32 N, S ~ 32 N)."""
+    periodic = bool(getattr(scene.grid, "periodic", False))
+    pad = 1 if periodic else 4
+    spectrum = n1 * (n2 // 2 + 1) if periodic else 2 * n1 * (n2 + 1)
+    return periodic, pad, pad * n1 * n2 * 8, spectrum * 16
+
+
 def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     """Memory and time a run of ``scene`` needs, computed from the grid, the plan and the
     instants alone (nothing is allocated).
@@ -331,10 +341,7 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
     pl = plan_ if plan_ is not None else plan(scene)
     n1, n2 = (int(v) for v in scene.grid.points)
     n = n1 * n2
-    periodic = bool(getattr(scene.grid, "periodic", False))
-    pad = 1 if periodic else 4                # a periodic grid is transformed unpadded
-    R = pad * n * 8
-    S = (n1 * (n2 // 2 + 1) if periodic else 2 * n1 * (n2 + 1)) * 16
+    periodic, pad, R, S = _transform_bytes(scene, n1, n2)
     bodies = (scene.indenter.body(), scene.halfspace.body())
     compliant = sum(len(b.part_creeps) for b in bodies if not b.rigid)   # kernel sets
     histories = sum(b.has_memory for b in bodies) if pl.memory != "none" else 0
