@@ -158,22 +158,37 @@ def periodic_bases(n1, n2, d1, d2):
     return out
 
 
-def _parts(bases):
-    """The shear and Poisson parts (times G) of the nine kernels from the basis symbols."""
-    r, b1, b2 = bases["r"], 1j * bases["1"], 1j * bases["2"]
-    zero = np.zeros_like(r)
-    shear = {"11": r, "22": r, "33": r, "12": zero, "21": zero,
-             "13": 0.5 * b1, "31": -0.5 * b1, "23": 0.5 * b2, "32": -0.5 * b2}
-    poisson = {"11": -bases["11"], "22": -bases["22"], "12": -bases["12"],
-               "21": -bases["12"], "33": -r, "13": -b1, "31": b1, "23": -b2, "32": b2}
-    return shear, poisson
+#: Each kernel as (real or imaginary, [(basis, weight of the shear part, weight of the
+#: Poisson part), ...]): K̂ = Σ (w_shear/G + ν w_Poisson/G) basis (module docstring).
+_TERMS = {
+    "11": ("real", [("r", 1.0, 0.0), ("11", 0.0, -1.0)]),
+    "22": ("real", [("r", 1.0, 0.0), ("22", 0.0, -1.0)]),
+    "33": ("real", [("r", 1.0, -1.0)]),
+    "12": ("real", [("12", 0.0, -1.0)]),
+    "21": ("real", [("12", 0.0, -1.0)]),
+    "13": ("imag", [("1", 0.5, -1.0)]),
+    "31": ("imag", [("1", -0.5, 1.0)]),
+    "23": ("imag", [("2", 0.5, -1.0)]),
+    "32": ("imag", [("2", -0.5, 1.0)]),
+}
 
 
-def _scaled(spectra, n1, n2):
-    """Spectra scaled for the inverse FFT (1/(n1 n2) folded in), complex, as the
-    Convolver keeps them."""
-    return {key: np.ascontiguousarray(spectra[key] / (n1 * n2), dtype=complex)
-            for key in KEYS}
+def _spectra(bases, shear, poisson, n1, n2):
+    """The nine kernel spectra with the shear part weighted by ``shear`` and the Poisson
+    part by ``poisson`` [1/Pa], scaled for the inverse FFT (1/(n1 n2) folded in), complex
+    (a purely real or purely imaginary array each), as the Convolver keeps them."""
+    scale = 1.0 / (n1 * n2)
+    out = {}
+    for key in KEYS:
+        part, terms = _TERMS[key]
+        spec = np.zeros(bases["r"].shape, dtype=complex)
+        target = spec.real if part == "real" else spec.imag
+        for basis, ws, wp in terms:
+            weight = (ws * shear + wp * poisson) * scale
+            if weight != 0.0:
+                target += weight * bases[basis]
+        out[key] = spec
+    return out
 
 
 def periodic_body_spectra(n1, n2, d1, d2, young, poisson):
@@ -183,17 +198,15 @@ def periodic_body_spectra(n1, n2, d1, d2, young, poisson):
     :meth:`~contactpipe.solver.convolution.Convolver.kernel_spectrum`."""
     nu = float(poisson)
     g = float(young) / (2.0 * (1.0 + nu))
-    shear, pois = _parts(periodic_bases(n1, n2, d1, d2))
-    return _scaled({k: (shear[k] + nu * pois[k]) / g for k in KEYS}, n1, n2)
+    return _spectra(periodic_bases(n1, n2, d1, d2), 1.0 / g, nu / g, n1, n2)
 
 
 def periodic_part_spectra(n1, n2, d1, d2, shear_modulus):
     """The shear and Poisson parts of a body's kernel spectra on a periodic grid (the
     periodic counterpart of :func:`~contactpipe.solver.influence.body_kernel_parts`)."""
     g = float(shear_modulus)
-    shear, pois = _parts(periodic_bases(n1, n2, d1, d2))
-    return (_scaled({k: v / g for k, v in shear.items()}, n1, n2),
-            _scaled({k: v / g for k, v in pois.items()}, n1, n2))
+    bases = periodic_bases(n1, n2, d1, d2)
+    return _spectra(bases, 1.0 / g, 0.0, n1, n2), _spectra(bases, 0.0, 1.0 / g, n1, n2)
 
 
 def periodic_kernels(n1, n2, d1, d2, young, poisson):
