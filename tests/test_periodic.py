@@ -451,3 +451,24 @@ def test_isolated_hertz_fretting_matches_the_free_boundary():
     p0 = free.p.values.max()
     assert np.abs(per.p.values - free.p.values).max() <= 0.01 * p0
     assert np.abs(per.q1.values - free.q1.values).max() <= 0.01 * p0
+
+
+def test_gross_sliding_under_displacement_control(tmp_path):
+    """Under tangential_displacement a periodic contact slides as a whole: a rigid rough
+    surface on an elastic body (ν = 0.5: no coupling), 32 x 32, pushed 10 µm (its stick
+    displacement is below 0.1 µm here) slips on every cell in contact, with q1 = μp and
+    T = μW within 1e-7 (4.4e-8 and 1.6e-8 measured: the vector solver's tolerance on the
+    slip's direction), and obeys the contact laws."""
+    n, L = 32, 1e-3
+    gap = _rough_gap(n, 1e-6, seed=5)
+    W, mu = 2e-4 * E * L * L, 0.3
+    body = {"material": "elastic", "young": E, "poisson": 0.5}
+    ds = cp.simulate(_surface_scene(tmp_path, gap, (L, L),
+                                    {"time": [0.0, 1.0], "normal_force": W,
+                                     "tangential_displacement": [0.0, 1e-5]},
+                                    halfspace=body, friction={"mu": mu}, time={"steps": 2}))
+    p, q1 = ds.p.values[-1], ds.q1.values[-1]
+    assert np.all(ds.status.values[-1][p > 0] == 2)
+    assert np.abs(q1 - mu * p).max() <= 1e-7 * mu * p.max()
+    assert float(ds.T1[-1]) == pytest.approx(mu * W, rel=1e-7)
+    cp.testing.assert_contact_laws(ds)
