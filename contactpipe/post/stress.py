@@ -183,22 +183,17 @@ def _grid(ds):
     return out[0][0], out[1][0], out[0][1], out[1][1]
 
 
-def _refuse_periodic(ds):
-    """A ValueError for the archive of a periodic cell (``grid.boundary = "periodic"``):
-    this stage's kernels are a non-periodic half-space's, which would leave out the
-    stress of the tractions' periodic images."""
+def _periodic(ds) -> bool:
+    """The archive's scene is one period of an infinite surface
+    (``grid.boundary = "periodic"``): its stresses come from the periodic kernels."""
     text = ds.attrs.get("scene")
     if not isinstance(text, str):
-        return
+        return False
     try:
         grid = loads_toml(text, "the archive's scene attribute").get("grid", {})
     except Exception:                     # noqa: BLE001 - reported by body_poisson
-        return
-    if isinstance(grid, dict) and grid.get("boundary") == "periodic":
-        raise ValueError("the archive's scene has grid.boundary = 'periodic': subsurface "
-                         "stresses of a periodic cell are not available (this stage's "
-                         "kernels are a non-periodic half-space's and would leave out the "
-                         "stress of the periodic images)")
+        return False
+    return isinstance(grid, dict) and grid.get("boundary") == "periodic"
 
 
 def check_request(ds, x3, body="halfspace", time=None, poisson=None):
@@ -228,7 +223,6 @@ def check_request(ds, x3, body="halfspace", time=None, poisson=None):
                          f"{deepest:g} m ({MAX_DEPTH_SIDES} times the grid's larger side, "
                          f"{side:g} m); below that the field is a point load's")
     idx = _time_index(ds, time)
-    _refuse_periodic(ds)
     if poisson is None:
         nu = body_poisson(ds, body)
     else:
@@ -384,7 +378,8 @@ def subsurface_stress(ds, x3, body: str = "halfspace", time=None, *, chunks=None
     idx, depths, nu, (n1, n2, d1, d2) = check_request(ds, x3, body, time, poisson)
     names = ["p"] + [q for q in ("q1", "q2") if q in ds.data_vars]
     sel = ds[names].isel(time=idx)
-    op = SubsurfaceOperator(n1, n2, d1, d2, nu, backend=fft, threads=threads)
+    op = SubsurfaceOperator(n1, n2, d1, d2, nu, backend=fft, threads=threads,
+                            periodic=_periodic(ds))
     sign_q = -1.0 if body == "indenter" else 1.0
     tc, zc = _chunk_sizes(len(idx), len(depths), n1, n2, chunks, SPECTRA_CACHE_BYTES)
     lazy = isinstance(chunks, dict) or (chunks is None and sel["p"].chunks is not None)

@@ -94,6 +94,7 @@ from collections import OrderedDict
 import numpy as np
 
 from .convolution import Convolver
+from .periodic_stress import periodic_depth_spectra
 
 __all__ = ["TRACTIONS", "COMPONENTS", "cell_stress", "point_force_stress", "depth_kernels",
            "DepthSpectra", "SubsurfaceOperator", "von_mises", "SPECTRA_CACHE_BYTES"]
@@ -386,6 +387,20 @@ class DepthSpectra:
             self.imag[key] = imag
         self.nbytes = sum(v.nbytes for v in shared.values())
 
+    @classmethod
+    def from_spectra(cls, spectra: dict) -> DepthSpectra:
+        """The spectra given (complex, scaled; each purely real or purely imaginary by
+        its parity), as a periodic grid's come
+        (:func:`~contactpipe.solver.periodic_stress.periodic_depth_spectra`)."""
+        out = object.__new__(cls)
+        out.khat, out.imag = {}, {}
+        for key, spec in spectra.items():
+            p1, p2 = PARITY[key]
+            out.imag[key] = p1 * p2 < 0
+            out.khat[key] = np.ascontiguousarray(spec.imag if out.imag[key] else spec.real)
+        out.nbytes = sum(v.nbytes for v in out.khat.values())
+        return out
+
 
 class _SpectraCache:
     """Process-wide LRU cache of :class:`DepthSpectra`, bounded in bytes, thread-safe."""
@@ -422,14 +437,14 @@ _CACHE = _SpectraCache()
 _LOCAL = threading.local()
 
 
-def _thread_convolver(n1, n2, backend, threads):
+def _thread_convolver(n1, n2, backend, threads, periodic=False):
     """One Convolver per thread and grid (its FFT buffers are not shared between threads)."""
     store = getattr(_LOCAL, "convolvers", None)
     if store is None:
         store = _LOCAL.convolvers = {}
-    key = (n1, n2, backend, threads)
+    key = (n1, n2, backend, threads, periodic)
     if key not in store:
-        store[key] = Convolver(n1, n2, backend=backend, threads=threads)
+        store[key] = Convolver(n1, n2, backend=backend, threads=threads, periodic=periodic)
     return store[key]
 
 
@@ -449,6 +464,9 @@ class SubsurfaceOperator:
     cache_bytes : int
         Bound of the shared cache of depth spectra [bytes] (default
         :data:`SPECTRA_CACHE_BYTES`). Spectra are keyed by (grid, nu, depth).
+    periodic : bool
+        The grid is one period of an infinite surface: circular convolution, unpadded,
+        with the periodic kernels of :mod:`~contactpipe.solver.periodic_stress`.
 
     Notes
     -----
@@ -456,24 +474,28 @@ class SubsurfaceOperator:
     """
 
     def __init__(self, n1, n2, d1, d2, poisson, backend="auto", threads=1,
-                 cache_bytes=None):
+                 cache_bytes=None, periodic=False):
         self.n1, self.n2 = int(n1), int(n2)
         self.d1, self.d2 = float(d1), float(d2)
         self.poisson = float(poisson)
         self.backend = backend
         self.threads = int(threads)
         self.cache_bytes = SPECTRA_CACHE_BYTES if cache_bytes is None else int(cache_bytes)
+        self.periodic = bool(periodic)
 
     @property
     def conv(self) -> Convolver:
         """This thread's DC-FFT engine for the grid (counts its transforms)."""
-        return _thread_convolver(self.n1, self.n2, self.backend, self.threads)
+        return _thread_convolver(self.n1, self.n2, self.backend, self.threads, self.periodic)
 
     def spectra(self, x3) -> DepthSpectra:
         """The (cached) kernel spectra of depth ``x3`` [m]."""
         z = float(x3)
-        key = (self.n1, self.n2, self.d1, self.d2, self.poisson, z)
+        key = (self.n1, self.n2, self.d1, self.d2, self.poisson, z, self.periodic)
         conv = self.conv
+        if self.periodic:
+            return _CACHE.get(key, lambda: DepthSpectra.from_spectra(periodic_depth_spectra(
+                self.n1, self.n2, self.d1, self.d2, self.poisson, z)), self.cache_bytes)
         return _CACHE.get(key, lambda: DepthSpectra(
             conv, depth_kernels(self.n1, self.n2, self.d1, self.d2, self.poisson, z)),
             self.cache_bytes)
