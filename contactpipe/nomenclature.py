@@ -138,6 +138,7 @@ HISTORY: dict[str, dict] = {
 #: take a map's name: ``friction.mu`` -> ``mu``).
 MAPS: dict[str, dict] = {
     "mu": _v(MAP, "1", "friction coefficient (mapped)"),
+    "h0": _v(MAP, "m", "initial gap of a measured or generated rough surface"),
 }
 
 COORDINATES: dict[str, dict] = {

@@ -84,6 +84,7 @@ MISTAKES = [
     # choices
     ("unknown shape", {"geometry.shape": "cone"},
      r"geometry\.shape must be one of 'sphere', 'ellipsoid', 'flat_punch', 'surface', "
+     r"'rough', "
      r"got 'cone'"),
     ("unknown material", {"halfspace.material": "plastic"},
      r"halfspace\.material must be one of 'rigid', 'elastic', 'viscoelastic', got 'plastic'"),

@@ -150,9 +150,10 @@ def resolve_accuracy(scene):
     if name not in PRESETS:
         raise SceneError(f"solver.accuracy = {name!r}: allowed {', '.join(PRESETS)}")
     pre = PRESETS[name]
-    if scene.geometry.shape == "surface":
-        raise SceneError("solver.accuracy with geometry.shape = 'surface': the contact size "
-                         "cannot be estimated; give grid.points and time.steps instead")
+    if scene.geometry.shape in ("surface", "rough"):
+        raise SceneError(f"solver.accuracy with geometry.shape = {scene.geometry.shape!r}: "
+                         f"the contact size cannot be estimated; give grid.points and "
+                         f"time.steps instead")
     # the largest contact's semi-axes (a flat punch: its radius) and the grid's sides
     a_max = scene.hertz_semi_axes()
     side = scene.resolved_grid_size()

@@ -140,7 +140,7 @@ def _grid_fields_asymmetric(scene) -> list:
     """The friction map and the gap surface that break the mirror symmetry x2 -> -x2;
     a file that cannot be read on the grid here counts as breaking it."""
     out = []
-    mapped, surface = scene.friction.mapped, scene.geometry.shape == "surface"
+    mapped, surface = scene.friction.mapped, scene.geometry.shape in ("surface", "rough")
     if not (mapped or surface):
         return out
     try:
@@ -148,9 +148,9 @@ def _grid_fields_asymmetric(scene) -> list:
     except (SceneError, TypeError, ValueError):
         return [f"{key}: its symmetry about x2 = 0 cannot be checked without the grid"
                 for key, flag in (("friction.mu (a map)", mapped),
-                                  ("geometry.file (a surface)", surface)) if flag]
+                                  ("geometry (a surface)", surface)) if flag]
     for flag, key, on_grid in ((mapped, "friction.mu (a map)", scene.friction.on_grid),
-                               (surface, "geometry.file (a surface)", scene.geometry.gap)):
+                               (surface, "geometry (a surface)", scene.geometry.gap)):
         if not flag:
             continue
         try:

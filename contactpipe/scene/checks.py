@@ -11,7 +11,7 @@ import numpy as np
 from .. import materials
 from . import friction_map
 from . import geometry as _geometry
-from .parts import MAX_STEPS, Grid, TimeMesh
+from .parts import MAX_STEPS, TOPOGRAPHIES, Grid, TimeMesh
 from .reach import (
     _TILTS,
     _knot_values,
@@ -20,6 +20,7 @@ from .reach import (
     contact_shifts,
     hertz_semi_axes,
 )
+from .rough import rough_problems
 from .tables import show
 
 __all__ = ["check_scene"]
@@ -175,7 +176,7 @@ def _grid_axes(p):
     if grid is None:
         return None
     if grid.size == "auto":
-        if geo is None or geo.shape == "surface" or None in (ind, half, load):
+        if geo is None or geo.shape in TOPOGRAPHIES or None in (ind, half, load):
             return None
         grid = Grid.make(points=grid.points, size=auto_grid_size(geo, ind, half, load))
     return grid.coordinates()
@@ -239,7 +240,7 @@ def _check_reach(p, problems):
         return
     if grid.periodic:
         return                  # no edge: the contact may cross the period's sides
-    if geo.shape == "surface" or p["indenter"] is None or p["halfspace"] is None:
+    if geo.shape in TOPOGRAPHIES or p["indenter"] is None or p["halfspace"] is None:
         return
     if geo.shape == "flat_punch" and grid.size == "auto":
         return                  # the punch's own end: its outermost cells' centres lie at
@@ -381,20 +382,25 @@ def _check_grid(p, problems):
         return
     ind, half, load = p["indenter"], p["halfspace"], p["load"]
     if grid.size == "auto":
-        if geo.shape == "surface":
-            problems.append("grid.size = 'auto' is not available for geometry.shape = "
-                            "'surface' (no Hertz estimate); give grid.size = [L1, L2] in m")
+        if geo.shape in TOPOGRAPHIES:
+            problems.append(f"grid.size = 'auto' is not available for geometry.shape = "
+                            f"{geo.shape!r} (no Hertz estimate); give grid.size = [L1, L2] "
+                            f"in m")
         elif geo.shape == "flat_punch" or None not in (ind, half, load):
             size = auto_grid_size(geo, ind, half, load)
             if not all(math.isfinite(s) and s > 0 for s in size):
                 problems.append(f"grid.size = 'auto': the Hertz estimate gives sides "
                                 f"{size} m, not finite and > 0; give grid.size = [L1, L2] "
                                 f"in m")
+    elif geo.shape == "rough":
+        problems.extend(rough_problems(geo.wavelengths, *grid.coordinates()))
     elif geo.shape == "surface":
-        found = _geometry.check_surface(geo.file, *grid.coordinates())
+        x1, x2 = grid.coordinates()
+        found = _geometry.surface_problems(geo.file, x1, x2, geo.missing, geo.resample)
         problems.extend(found)
         if (not found and load is not None and grid.size_check is not False
-                and not grid.periodic):
+                and not grid.periodic and geo.form != "sphere"
+                and _geometry.is_gap_file(geo.file)):
             _check_surface_reach(geo, grid, load, problems)
 
 

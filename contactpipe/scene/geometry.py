@@ -10,6 +10,12 @@ where the gap is zero (docs/scene-file.md, [geometry]); the gap is >= 0 everywhe
 - :func:`flat_punch_gap`: 0 on the flat circular end, a finite step outside.
 - :func:`surface_gap`: read from a netCDF file (variable ``gap`` over ``x1``, ``x2``,
   interpolated linearly onto the grid) or a ``.npy`` array on the grid itself.
+- :func:`topography_gap`: ``shape = "surface"`` whatever its file: a gap file as above,
+  or measured heights z (:mod:`contactpipe.scene.topography`), whose gap is
+  max(z) - z on the grid (a peak closes the gap; first contact at the highest point).
+- :func:`rough_gap`: a generated self-affine surface (:mod:`contactpipe.scene.rough`).
+
+Both may ride on a sphere (``form = "sphere"``): the heights minus r^2 / (2 R).
 
 Units: metres throughout.
 """
@@ -21,10 +27,11 @@ import os
 import numpy as np
 
 from ..exceptions import SceneError
+from . import rough, topography
 from .gridded import coordinate_problems, coverage_problems, in_metres, variable_problems
 
 __all__ = ["sphere_gap", "ellipsoid_gap", "flat_punch_gap", "surface_gap", "check_surface",
-           "surface_edge"]
+           "surface_edge", "is_gap_file", "topography_gap", "rough_gap", "heights_gap"]
 
 #: Units a netCDF ``gap`` variable may declare (absent is read as metres).
 _METRE = ("m", "meter", "metre", "meters", "metres")
@@ -289,3 +296,95 @@ def surface_edge(file, x1, x2):
         xs2.append(g2.ravel())
         hs.append(h.ravel())
     return np.concatenate(xs1), np.concatenate(xs2), np.concatenate(hs), low
+
+
+# ------------------------------------------------------------ measured and generated surfaces
+
+def is_gap_file(file) -> bool:
+    """A surface file that holds the gap itself: a ``.npy`` array, or a netCDF file
+    with a variable ``gap`` (or any file not of a height format, read as such a netCDF
+    file); a height file (x3p, sur, opd, plu, sdf, x y z text, netCDF ``heights``)
+    holds heights z."""
+    path = os.fspath(file)
+    fmt = topography.height_format(path)
+    if _is_npy(path) or fmt is None:
+        return True
+    if fmt != "netcdf":
+        return False
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(path) as ds:
+            return "gap" in ds.data_vars or "heights" not in ds.data_vars
+    except Exception:  # noqa: BLE001 - unreadable: the gap reader says why
+        return True
+
+
+def _height_problems(path, x1, x2, missing, resample) -> list:
+    try:
+        h = topography.fill_missing(topography.read_heights(path), missing or "refuse",
+                                    path)
+    except SceneError as exc:
+        return [str(exc)]
+    if x1 is None or x2 is None:
+        return []
+    return topography.grid_problems(h, x1, x2, resample is not False, path)
+
+
+def surface_problems(file, x1=None, x2=None, missing=None, resample=None) -> list:
+    """Problems of ``shape = "surface"``'s file, and of the grid when ``x1``, ``x2`` [m]
+    are given: :func:`check_surface` for a gap file (``missing`` and ``resample`` are
+    for height files), else the height file read, its missing points and its cover of
+    the grid (:mod:`contactpipe.scene.topography`)."""
+    path = os.fspath(file)
+    if not os.path.isfile(path):
+        return [f"geometry.file {path!r}: no such file"]
+    if not is_gap_file(path):
+        return _height_problems(path, x1, x2, missing, resample)
+    given = [k for k, v in (("missing", missing), ("resample", resample)) if v is not None]
+    if given:
+        return [f"geometry.{given[0]} is for height files (x3p, sur, opd, plu, sdf, x y z "
+                f"text, netCDF 'heights'); geometry.file {path!r} holds the gap itself: "
+                f"remove geometry.{given[0]}"]
+    return check_surface(path, x1, x2)
+
+
+def heights_gap(z, x1, x2, radius=None):
+    """The gap of heights ``z`` (N1, N2) [m] on the grid, riding on a sphere of
+    ``radius`` [m] when given: with z' = z - r^2 / (2 R), the gap max(z') - z' (zero at
+    the highest point, where contact starts)."""
+    z = np.asarray(z, dtype=float)
+    if radius is not None:
+        z = z - sphere_gap(x1, x2, radius)
+    return float(np.max(z)) - z
+
+
+def topography_gap(x1, x2, file, radius=None, missing=None, resample=None):
+    """Gap [m] (N1, N2) of ``shape = "surface"``: a gap file's gap (:func:`surface_gap`,
+    plus the sphere's r^2 / (2 R) when ``radius`` is given), or a height file's heights
+    on the grid (bilinear resampling unless ``resample`` is false; missing points
+    refused or filled by ``missing``) turned into a gap by :func:`heights_gap`."""
+    path = os.fspath(file)
+    problems = surface_problems(path, x1, x2, missing, resample)
+    if problems:
+        raise SceneError(problems)
+    if is_gap_file(path):
+        gap = surface_gap(x1, x2, path)
+        return gap if radius is None else gap + sphere_gap(x1, x2, radius)
+    h = topography.fill_missing(topography.read_heights(path), missing or "refuse", path)
+    return heights_gap(topography.on_grid(h, x1, x2, resample is not False), x1, x2, radius)
+
+
+def rough_gap(x1, x2, hurst, wavelengths, seed, rms_slope=None, rms_height=None,
+              radius=None):
+    """Gap [m] (N1, N2) of a generated self-affine surface (``shape = "rough"``) on the
+    grid of cell centres ``x1``, ``x2`` [m] (:func:`contactpipe.scene.rough.self_affine`),
+    riding on a sphere of ``radius`` when given (:func:`heights_gap`)."""
+    x1, x2 = np.asarray(x1, dtype=float), np.asarray(x2, dtype=float)
+    problems = rough.rough_problems(wavelengths, x1, x2)
+    if problems:
+        raise SceneError(problems)
+    l1, l2 = (float(x[1] - x[0]) * x.size for x in (x1, x2))
+    z = rough.self_affine(x1.size, x2.size, l1, l2, hurst, wavelengths, seed,
+                          rms_slope_=rms_slope, rms_height=rms_height)
+    return heights_gap(z, x1, x2, radius)

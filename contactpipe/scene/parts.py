@@ -33,7 +33,11 @@ __all__ = ["Part", "Geometry", "BodySpec", "Friction", "Fretting", "Load", "Grid
            "TimeMesh", "Solver", "Output", "knot_steps", "SHAPES", "MATERIALS",
            "CREEP_MODELS", "MAX_STEPS", "MAX_CYCLES", "MIN_POINTS", "MAX_POINTS"]
 
-SHAPES = ("sphere", "ellipsoid", "flat_punch", "surface")
+SHAPES = ("sphere", "ellipsoid", "flat_punch", "surface", "rough")
+#: Shapes of heights on the grid (no Hertz estimate of their contact).
+TOPOGRAPHIES = ("surface", "rough")
+FORMS = ("flat", "sphere")
+MISSING = ("refuse", "fill")
 MATERIALS = ("rigid", "elastic", "viscoelastic")
 CREEP_MODELS = ("maxwell", "kelvin_voigt", "zener", "prony", "tabulated", "fit")
 TIME_RULES = ("auto", "bdf2", "linear", "step_start")
@@ -57,7 +61,8 @@ SHAPE_KEYS = {
     "sphere": (("radius",), ()),
     "ellipsoid": (("radii",), ()),
     "flat_punch": (("radius",), ("height",)),
-    "surface": (("file",), ()),
+    "surface": (("file",), ("form", "radius", "resample", "missing")),
+    "rough": (("hurst", "wavelengths", "seed"), ("rms_slope", "rms_height", "form", "radius")),
 }
 #: Keys each creep model requires and allows (``tabulated`` and ``fit`` are extensions).
 CREEP_KEYS = {
@@ -87,22 +92,54 @@ def _at_least_1(n) -> bool:
 _POSITIVE_M = "a finite number > 0 [m]"
 
 
+def _roll_off_first(w, key):
+    if w[0] <= w[1]:
+        return (f"{key} = {show(list(w))}: the roll-off (first) must be longer than the "
+                f"short cut-off (second)")
+    return None
+
+
+def _topography_rules(r, shape, v) -> None:
+    """A surface's form takes its radius; a rough surface takes one rms."""
+    if v["form"] == "sphere" and v["radius"] is None and not r.has("radius"):
+        r.missing("radius", " for form = 'sphere'", _POSITIVE_M)
+    elif v["form"] != "sphere" and r.has("radius"):
+        r.forbid("radius", f"by shape = {shape!r} without form = 'sphere'")
+    if shape == "rough" and (r.has("rms_slope") == r.has("rms_height")):
+        r.add(f"{r.key('rms_slope')} or {r.key('rms_height')}: give exactly one of the "
+              f"two for shape = 'rough' (got "
+              f"{'both' if r.has('rms_slope') else 'neither'})")
+
+
 @dataclass(frozen=True)
 class Geometry(Part):
     """Composite initial gap of the two bodies; first contact at the origin.
 
     Parameters
     ----------
-    shape : {"sphere", "ellipsoid", "flat_punch", "surface"}
+    shape : {"sphere", "ellipsoid", "flat_punch", "surface", "rough"}
     radius : float, optional
-        Sphere radius, or radius of the flat punch's end [m].
+        Sphere radius, or radius of the flat punch's end, or of the sphere a surface
+        rides on (``form = "sphere"``) [m].
     radii : (float, float), optional
         Ellipsoid principal radii (R1 along x1, R2 along x2) [m].
     file : str, optional
-        Surface file (netCDF variable ``gap`` over x1, x2, or a ``.npy`` on the grid);
-        stored as an absolute path.
+        Surface file: a gap (netCDF variable ``gap`` over x1, x2, or a ``.npy`` on the
+        grid) or measured heights (x3p, sur, opd, plu, sdf, x y z text, netCDF
+        ``heights``); stored as an absolute path.
     height : float, optional
         Flat punch only: gap outside the flat end [m]; default the radius.
+    form : {"flat", "sphere"}, optional
+        Surface and rough: the heights on a plane (absent: flat) or on a sphere.
+    resample : bool, optional
+        Height files: false takes the file's grid as it is (grid.points and grid.size
+        must be the file's); absent or true resamples bilinearly onto the grid.
+    missing : {"refuse", "fill"}, optional
+        Height files: missing points refused (absent) or given the nearest measured
+        height.
+    hurst, rms_slope, rms_height, wavelengths, seed : optional
+        Rough: Hurst exponent (0, 1), rms slope [1] or rms height [m] (one of the two),
+        [roll-off, short cut-off] wavelengths [m], seed of the random phases.
     """
 
     shape: str
@@ -110,6 +147,14 @@ class Geometry(Part):
     radii: tuple | None = None
     file: str | None = None
     height: float | None = None
+    form: str | None = None
+    resample: bool | None = None
+    missing: str | None = None
+    hurst: float | None = None
+    rms_slope: float | None = None
+    rms_height: float | None = None
+    wavelengths: tuple | None = None
+    seed: int | None = None
 
     PATH = "geometry"
     FIELDS = (
@@ -120,6 +165,17 @@ class Geometry(Part):
         Field("file", "path", "the path of a netCDF file (variable 'gap' over x1, x2 [m]) "
                               "or a .npy array"),
         Field("height", "number", _POSITIVE_M, ok=_positive, unit="m"),
+        Field("form", "choice", options=FORMS),
+        Field("resample", "bool"),
+        Field("missing", "choice", options=MISSING),
+        Field("hurst", "number", "a number strictly between 0 and 1",
+              ok=lambda h: 0 < h < 1, unit="1"),
+        Field("rms_slope", "number", "a finite number > 0 [1]", ok=_positive, unit="1"),
+        Field("rms_height", "number", _POSITIVE_M, ok=_positive, unit="m"),
+        Field("wavelengths", "numbers", "two finite numbers > 0 [m], [roll-off, short "
+              "cut-off], roll-off > cut-off", ok=_positive, length=2, unit="m",
+              check=_roll_off_first),
+        Field("seed", "integer", "an integer >= 0", ok=lambda n: n >= 0),
     )
 
     @classmethod
@@ -137,9 +193,12 @@ class Geometry(Part):
                    need=f" for shape = {shape!r}", require=req)
         if shape == "flat_punch" and v["height"] is None and not r.has("height"):
             v["height"] = v["radius"]
+        if shape in TOPOGRAPHIES:
+            _topography_rules(r, shape, v)
         if v.get("file") is not None:
             v["file"] = os.path.abspath(os.path.expanduser(v["file"]))
-            r.add(_geometry.check_surface(v["file"]))
+            r.add(_geometry.surface_problems(v["file"], missing=v["missing"],
+                                             resample=v["resample"]))
         return cls.make(shape=shape, **v) if r.ok else None
 
     def gap(self, x1, x2):
@@ -150,7 +209,11 @@ class Geometry(Part):
             return _geometry.ellipsoid_gap(x1, x2, self.radii)
         if self.shape == "flat_punch":
             return _geometry.flat_punch_gap(x1, x2, self.radius, self.height)
-        return _geometry.surface_gap(x1, x2, self.file)
+        if self.shape == "rough":
+            return _geometry.rough_gap(x1, x2, self.hurst, self.wavelengths, self.seed,
+                                       self.rms_slope, self.rms_height, self.radius)
+        return _geometry.topography_gap(x1, x2, self.file, self.radius, self.missing,
+                                        self.resample)
 
 
 # ----------------------------------------------------------------------------- bodies

@@ -71,9 +71,9 @@ def hertz_semi_axes(geometry, indenter, halfspace, load, moduli: str = "window")
     Returns
     -------
     (float, float) or None
-        (a1, a2) [m] along x1, x2; None for a surface (no estimate).
+        (a1, a2) [m] along x1, x2; None for a surface or a rough one (no estimate).
     """
-    if geometry.shape == "surface":
+    if geometry.shape in ("surface", "rough"):
         return None
     if geometry.shape == "flat_punch":
         return geometry.radius, geometry.radius
@@ -125,7 +125,7 @@ def contact_shifts(geometry, load):
         it happens, and the signed shift: (0.0, None, None, None, 0.0) without a tilt or
         where W is not known (approach control).
     """
-    if geometry.shape == "surface":
+    if geometry.shape in ("surface", "rough"):
         return None
     t, W = load.knots()[:2]
     out: list[tuple[float, str | None, float | None, float | None, float]] = [
@@ -157,7 +157,7 @@ def contact_reach(geometry, indenter, halfspace, load):
     and x2 [m]: the Hertz semi-axes (:func:`hertz_semi_axes`, the most compliant creep
     factor over the window) plus the largest shift of a tilt (:func:`contact_shifts`);
     a flat punch's radius; None for a surface."""
-    if geometry.shape == "surface":
+    if geometry.shape in ("surface", "rough"):
         return None
     a = hertz_semi_axes(geometry, indenter, halfspace, load)
     shifts = contact_shifts(geometry, load)
@@ -169,7 +169,7 @@ def auto_grid_size(geometry, indenter, halfspace, load):
     the reach of the largest contact (:func:`contact_reach`: the Hertz semi-axes plus
     a tilt's shift), or :data:`AUTO_PUNCH_FACTOR` times a flat punch's radius; None for
     a surface."""
-    if geometry.shape == "surface":
+    if geometry.shape in ("surface", "rough"):
         return None
     if geometry.shape == "flat_punch":
         side = AUTO_PUNCH_FACTOR * geometry.radius

@@ -139,7 +139,7 @@ def _scales(ds):
         scene = scene_of(ds)
     except ArchiveError:
         scene = None
-    if scene is not None and scene.geometry.shape != "surface":
+    if scene is not None and scene.geometry.shape not in ("surface", "rough"):
         W = float(np.max(scene.load.knots()[1]))
         b1, b2 = scene.indenter.body(), scene.halfspace.body()
         phi = [b.creep.phi0 if b.kind == "viscoelastic" and b.creep.phi0 > 0 else 1.0
