@@ -21,14 +21,15 @@ MAXWELL = {"material": "viscoelastic", "young": 210e9, "poisson": 0.3, "creep": 
            "relaxation_time": 1.0}
 
 
-def _loop(amplitude, steps=10, **over):
+def _loop(amplitude, steps=10, n=N, **over):
     """The fretting loop T: 0 -> +T* -> -T* -> +T*, T* = amplitude mu W, on the rough
-    sphere (steel on steel unless ``over`` says otherwise)."""
+    sphere of n^2 cells (steel on steel unless ``over`` says otherwise)."""
     ts = amplitude * MU * W
-    return make_scene(geometry=ROUGH, friction={"mu": MU},
+    return make_scene(geometry={**ROUGH, "wavelengths": [SIDE / 2, 6 * SIDE / n]},
+                      friction={"mu": MU},
                       load={"time": [0.0, 0.2, 0.6, 1.0], "normal_force": W,
                             "tangential_force": [0.0, ts, -ts, ts]},
-                      grid={"points": [N, N], "size": [SIDE, SIDE]},
+                      grid={"points": [n, n], "size": [SIDE, SIDE]},
                       time={"steps": steps}, **over)
 
 
@@ -99,3 +100,25 @@ def test_memory_runs_on_a_rough_sphere():
     area = ds.contact_area.values
     assert area[-1] > 1.2 * area[1]
 
+
+
+def test_the_read_back_check_holds_a_small_chunk_cache(monkeypatch, tmp_path):
+    """The written archive is read back with a 1 MiB chunk cache per variable, not the
+    HDF5 library's 64 MiB, which kept every chunk read (at 512^2, 21 instants: 325 MiB
+    above the estimate, measured); the library's default is restored afterwards."""
+    import netCDF4
+
+    from contactpipe.archive import writer
+
+    seen = []
+    real = writer.xr.open_dataset
+
+    def spy(file, *args, **kwargs):
+        if str(file).endswith(".part"):               # the writer's read-back check
+            seen.append(netCDF4.get_chunk_cache()[0])
+        return real(file, *args, **kwargs)
+    default = netCDF4.get_chunk_cache()
+    monkeypatch.setattr(writer.xr, "open_dataset", spy)
+    cp.simulate(_loop(0.5, steps=5, n=16), tmp_path / "small.nc")
+    assert seen and all(size == writer.READBACK_CACHE == 2 ** 20 for size in seen)
+    assert netCDF4.get_chunk_cache() == default

@@ -206,12 +206,31 @@ def _discard(nc, tmp: pathlib.Path) -> None:
         pass
 
 
+#: HDF5 chunk cache of each variable while a written file is read back [bytes]. The
+#: library's default (64 MiB a variable) kept every chunk read, so the check held up to
+#: 64 MiB per field (+325 MiB at 512^2, 21 instants); the check reads each chunk once.
+READBACK_CACHE = 2**20
+
+
+def _open_for_check(file):
+    """The file opened by xarray with a small chunk cache (:data:`READBACK_CACHE`); the
+    library's default is restored for later opens."""
+    import netCDF4
+
+    old = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(READBACK_CACHE, old[1], old[2])
+    try:
+        return xr.open_dataset(file, engine="netcdf4", decode_timedelta=False)
+    finally:
+        netCDF4.set_chunk_cache(*old)
+
+
 def _written_problems(file, x1, x2, names, steps: int, whole: bool) -> list[str]:
     """What is wrong with a written file, read back: its grid, its variables, its instants
     (exactly ``steps`` when ``whole``, at least ``steps`` for a part file to continue) and
     every value of the first ``steps`` instants (reading verifies the checksums)."""
     try:
-        ds = xr.open_dataset(file, engine="netcdf4", decode_timedelta=False)
+        ds = _open_for_check(file)
     except Exception as e:                 # noqa: BLE001 - HDF/netCDF errors of every kind
         return [f"unreadable ({one_line(e)})"]
     with ds:
