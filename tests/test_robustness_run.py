@@ -286,7 +286,8 @@ def test_estimate_grows_with_the_grid_and_is_refused_beyond_the_limit():
     assert big.grid == (4096, 4096) and big.memory_bytes > 6 * 2**30
     assert ratio > 1000                          # 16.7 M cells against 576 (plus the fixed)
     assert check_resources(small, available=2**30) is small
-    with pytest.raises(SceneError, match=r"^the run needs about .* GiB \(operators .*\) and "
+    with pytest.raises(SceneError, match=r"^the run needs about .* GiB \(\d+\.\d KiB per cell; "
+                                         r"operators .*\) and "
                                          r"at least .* for 11 instants on 4096x4096 cells, "
                                          r"but only 6.0 GiB is available \(given limit\); "
                                          r"use fewer grid.points"):

@@ -3,6 +3,7 @@ the paper's sphere), elastic and viscoelastic, free boundary, 48^2 cells: the co
 laws, the initial gap in the archive, the loop energy against the amplitude, memory, and
 the stick and slip clusters."""
 import numpy as np
+import pytest
 import xarray as xr
 from helpers import A_HERTZ, MU, R, W, make_scene
 
@@ -100,6 +101,35 @@ def test_memory_runs_on_a_rough_sphere():
     area = ds.contact_area.values
     assert area[-1] > 1.2 * area[1]
 
+
+
+def test_a_512_rough_run_with_memory_is_refused_when_it_would_not_fit(monkeypatch,
+                                                                       tmp_path):
+    """512^2 free-boundary partial slip with memory on the rough sphere, 20 steps: the
+    estimate holds the surface's h0 map (8 bytes a cell) and is about 3 kB a cell
+    (benchmarks/bench_rough.py measures the run); with 1 byte less memory available than
+    the estimate, cp.simulate refuses before the run starts, in one line naming the
+    estimate, its figure per cell and the memory available; with the estimate available
+    it would start."""
+    from contactpipe.planning import resources
+
+    scene = _loop(0.5, steps=20, n=512, indenter={"material": "rigid"}, halfspace=MAXWELL)
+    est = resources.estimate_resources(scene)
+    assert est.parts["surface"] == 512 ** 2 * 8
+    assert 2000 < est.bytes_per_cell < 5000
+    assert resources.check_resources(est, available=est.memory_bytes) is est
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the run started")
+    monkeypatch.setattr(cp.simulation.march, "_run", refuse)
+    monkeypatch.setattr(resources, "available_memory",
+                        lambda: (est.memory_bytes - 1, "test limit"))
+    with pytest.raises(cp.SceneError) as err:
+        cp.simulate(scene, tmp_path / "big.nc")
+    text = str(err.value)
+    assert text.startswith("the run needs about ") and "\n" not in text
+    assert f"({est.bytes_per_cell / 1024:.1f} KiB per cell;" in text
+    assert "512x512 cells" in text and "available (test limit)" in text
 
 
 def test_the_read_back_check_holds_a_small_chunk_cache(monkeypatch, tmp_path):

@@ -45,12 +45,21 @@ __all__ = ["Resources", "estimate_resources", "available_memory", "check_resourc
 #                      vectors and the record of the instant
 #   output             streamed: one chunk per variable and the read-back check's block;
 #                      in memory: every instant kept, then stacked (twice)
+#   surface            a rough or measured surface: its initial gap h0, a map the archive
+#                      keeps (N floats, twice in memory); while the gap is made, before
+#                      the kernels, SURFACE_SETUP bytes per cell of the grid and of the
+#                      height file (read, filled, resampled; a generated one: its spectra)
 # The set-up's padded kernels are freed before the operators are formed, so the peak is
 # the spectra plus the larger of the set-up and everything else. WORKING and BASE_BYTES
 # were calibrated on the peak resident memory of real runs (see estimate_resources).
 
 #: Floats per cell of the per-step working arrays, by tangential model.
 WORKING = {"none": 25, "scalar": 45, "vector": 70}
+#: Bytes per cell held while a surface's gap is made (freed before the kernels): a height
+#: file's heights, their mask, the nearest-point indices of a fill and the resampling
+#: points per file point and per grid cell; a generated surface's noise, spectra and
+#: phases per grid cell.
+SURFACE_SETUP = {"file": 48, "grid": 48, "rough": 112}
 #: Fixed allowance for the allocator, FFTW plans and library buffers [bytes].
 BASE_BYTES = 16 * 2**20
 #: Field data the archive's read-back check holds at once [bytes]
@@ -130,11 +139,17 @@ class Resources:
     estimated_seconds: float = 0.0
     history_terms: float = 0.0
 
+    @property
+    def bytes_per_cell(self) -> float:
+        """The estimate per cell of the grid [bytes]."""
+        return self.memory_bytes / max(1, self.grid[0] * self.grid[1])
+
     def describe(self) -> str:
-        """One line: the total and its three largest items."""
+        """One line: the total, per cell, and its three largest items."""
         top = sorted(self.parts.items(), key=lambda kv: -kv[1])[:3]
         items = ", ".join(f"{k} {_fmt_bytes(v)}" for k, v in top)
-        return (f"{_fmt_bytes(self.memory_bytes)} ({items}) and at least "
+        return (f"{_fmt_bytes(self.memory_bytes)} ({_fmt_bytes(self.bytes_per_cell)} per "
+                f"cell; {items}) and at least "
                 f"{_fmt_seconds(self.seconds)} for {self.instants} instants on "
                 f"{self.grid[0]}x{self.grid[1]} cells")
 
@@ -267,6 +282,46 @@ def _output_bytes(scene, tangential, instants, n, in_memory) -> int:
     return per_instant + check
 
 
+def _surface_bytes(scene, n, in_memory) -> tuple[int, int]:
+    """(bytes held through the run, bytes while the gap is made) of a rough or measured
+    surface; (0, 0) for the analytical shapes."""
+    geo = scene.geometry
+    if geo.shape not in ("surface", "rough"):
+        return 0, 0
+    held = n * np.dtype(scene.output.precision).itemsize * (2 if in_memory else 1)
+    if geo.shape == "rough":
+        return held, SURFACE_SETUP["rough"] * n
+    points = n
+    try:
+        from ..scene.geometry import is_gap_file
+        from ..scene.topography import read_heights
+
+        if not is_gap_file(geo.file):
+            points = int(np.prod(read_heights(geo.file).shape))   # cached: read once
+    except (SceneError, OSError):
+        pass
+    return held, SURFACE_SETUP["file"] * points + SURFACE_SETUP["grid"] * n
+
+
+def _add_surface(parts, scene, n, in_memory, R, S) -> None:
+    """A rough or measured surface's items in ``parts`` (:func:`_surface_bytes`), and a
+    second contact window: a contact of islands retries its window, holding a second
+    window's spectra and buffers (rough sphere on Maxwell, vector, coupled, 512^2: +93 MiB
+    measured against a smooth sphere, 115 MiB counted; benchmarks/bench_rough.py)."""
+    parts["surface"], parts["surface set-up"] = _surface_bytes(scene, n, in_memory)
+    if parts["surface"] and parts["contact windows"]:
+        parts["contact windows"] += int(LARGEST_SHARE * (9 * S + 2 * R + 7 * S))
+
+
+def _peak(parts) -> int:
+    """The peak of the items: the padded kernels of the set-up are freed before the
+    operators are formed, and a surface's set-up before the kernels."""
+    setup = ("kernel spectra", "kernel set-up", "surface set-up", "base")
+    peak = parts["kernel spectra"] + parts["base"] + max(
+        parts["kernel set-up"], sum(v for k, v in parts.items() if k not in setup))
+    return max(peak, parts["surface set-up"] + parts["surface"] + parts["base"])
+
+
 def _fft_pairs(scene, pl, n1, n2, instants) -> float:
     """The FFT pairs of a run: per instant, by the plan's forms, times the instants (the
     later ones by their share of a whole-grid step, the first by its preload's)."""
@@ -359,11 +414,8 @@ def estimate_resources(scene, plan_=None, in_memory=False) -> Resources:
         "contact windows": _window_bytes(n1, n2, R, S),
         "base": BASE_BYTES,
     }
-    pairs, m = _fft_pairs(scene, pl, n1, n2, instants), pad * n
-    # the padded kernels of the set-up are freed before the operators are formed
-    peak = parts["kernel spectra"] + parts["base"] + max(
-        parts["kernel set-up"], sum(v for k, v in parts.items()
-                                    if k not in ("kernel spectra", "kernel set-up", "base")))
+    _add_surface(parts, scene, n, in_memory, R, S)
+    pairs, m, peak = _fft_pairs(scene, pl, n1, n2, instants), pad * n, _peak(parts)
     terms = _direct_terms(bodies, pl.memory, instants)
     history, fft = terms * (DIRECT_TERM_S + 3 * n * DIRECT_FLOAT_S), \
         pairs * FFT_FLOOR_S * m * math.log2(max(m, 2))
