@@ -152,3 +152,23 @@ def test_the_read_back_check_holds_a_small_chunk_cache(monkeypatch, tmp_path):
     cp.simulate(_loop(0.5, steps=5, n=16), tmp_path / "small.nc")
     assert seen and all(size == writer.READBACK_CACHE == 2 ** 20 for size in seen)
     assert netCDF4.get_chunk_cache() == default
+
+
+def test_a_rough_surface_is_one_period_on_a_periodic_grid(tmp_path):
+    """32^2 periodic cell, a rough surface (H = 0.8, rms height 0.2 um), W = 100 N: the
+    contact laws hold, and the same surface shifted by (7, 12) cells (its gap as a .npy
+    file) gives the pressure shifted by as much (to 1e-6 of its largest value): the
+    generated surface and the contact have no edge."""
+    side = 3 * A_HERTZ
+    geo = {"shape": "rough", "hurst": 0.8, "rms_height": 2e-7,
+           "wavelengths": [side / 2, 4 * side / 32], "seed": 2}
+    grid = {"points": [32, 32], "size": [side, side], "boundary": "periodic"}
+    load = {"time": [0.0, 1.0], "normal_force": 100.0}
+    ds = cp.simulate(make_scene(geometry=geo, grid=grid, load=load))
+    assert contact_law_violations(ds) == []
+    path = tmp_path / "shifted.npy"
+    np.save(path, np.roll(ds["h0"].values, (7, 12), axis=(0, 1)))
+    moved = cp.simulate(make_scene(geometry={"shape": "surface", "file": str(path)},
+                                   grid=grid, load=load))
+    p, q = ds.p.values[-1], moved.p.values[-1]
+    assert np.max(np.abs(np.roll(p, (7, 12), axis=(0, 1)) - q)) <= 1e-6 * p.max()
