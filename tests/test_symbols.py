@@ -110,3 +110,18 @@ def test_no_poisson_effect_gives_the_isotropic_filter():
     iso, along = T(v, 0.0), T(v, 0.0, axis=(np.cos(1.0), np.sin(1.0)))
     np.testing.assert_allclose(along, iso, rtol=0, atol=op._plane().nu * np.abs(iso).max()
                                + 1e-13 * np.abs(iso).max())
+
+
+def test_joint_filter_scales_the_shear_block_alone():
+    """ContactOperator.joint_filter(c): the joint preconditioner with its shear block's
+    filter times c (the joint solve's 1/μ² folded into the symbol): pressure block the
+    same bit for bit, shear block c times it to 1e-14 of its largest value, for c = 100
+    (μ = 0.1) and the unscaled filter for c = 1."""
+    op = _op(*GRIDS[1])
+    n1, n2 = GRIDS[1][:2]
+    v = np.random.default_rng(13).standard_normal((2, n1, n2))
+    plain = op.joint_preconditioner()(v)
+    scaled = op.joint_filter(100.0)(v)
+    assert np.array_equal(scaled[0], plain[0])
+    assert np.abs(scaled[1] - 100.0 * plain[1]).max() <= 1e-14 * 100.0 * np.abs(plain[1]).max()
+    assert np.array_equal(op.joint_filter(1.0)(v), plain)

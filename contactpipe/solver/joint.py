@@ -145,12 +145,11 @@ def solve_joint(op, b, W, T1, cell_area, mu, p0, q0, tol, max_iter,
 
     apply = _operator(conv, blocks, tuning)   # a zero block (a start's update): no transform
 
-    filter_ = op.joint_preconditioner()
+    filter_ = op.joint_filter(1.0 / (mu * mu))
+    work = np.empty(shape)          # box_cg keeps no filtered field past its iteration
 
     def precondition(v):
-        z = filter_(v, out=np.empty(shape))
-        z[1] /= mu * mu
-        return z
+        return filter_(v, out=work)
 
     b = np.stack([b[0], mu * b[1]])
     rows = BlockSums([W / cell_area, T1 / cell_area / mu])

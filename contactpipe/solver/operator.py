@@ -313,7 +313,15 @@ class ContactOperator:
         iterations a step of steel-on-aluminium fretting: docs/design-choices.md, D4).
         The coupling blocks K13, K31 are left out (in the filter they cost iterations:
         docs/design-choices.md)."""
+        return self.joint_filter()
+
+    def joint_filter(self, shear=1.0):
+        """:meth:`joint_preconditioner` with its shear block's filter times ``shear`` [1]
+        (the joint solve's s = q/μ takes 1/μ²: folded into the symbol, no pass of its
+        own)."""
         symbol = self._joint_symbols()
+        if shear != 1.0:
+            symbol = np.stack([symbol[0], symbol[1] * shear])
         return lambda v, out=None: self.conv.periodic_filter(symbol, v, out=out)
 
     def shear_preconditioner(self):
