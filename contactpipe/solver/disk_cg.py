@@ -285,8 +285,11 @@ def direction(M, gt, curv, qhat, a_self, free, turning, tuning=TUNING):
             B = np.sqrt(np.where(turning, k / (k + curv), act))
             z[c] += B * M(B * g[c], d, band=band, axis=axes[c])
     z = np.einsum("ci,c...->i...", axes, z)
-    along = qhat[0] * z[0] + qhat[1] * z[1]
-    return np.where(turning, z - along * qhat, z)
+    along = qhat[0] * z[0]                  # z's part along q̂, cut off turning cells
+    along += qhat[1] * z[1]
+    along *= turning
+    z -= along * qhat
+    return z
 
 
 def shortened(t, tau, rho, turning, limit=TUNING.spin):
@@ -358,23 +361,30 @@ def _residual(x, g, rho, rho_safe, movable, con, lam, M, a_self, unit, pressure,
     :func:`direction`'s on the shear, the pressure block's own on p."""
     s = x[-2:]
     mag = magnitude(s)
-    at_bound = movable & on_bound(mag, rho)
+    at_bound = on_bound(mag, rho)
+    at_bound &= movable
     stick = movable & ~at_bound
     if stick.any():
         lam = con.fit(g[-2:], stick)
-    gr = g.copy()
+    gr = g                                  # the caller's A x + b, reduced in place
     gr[-2:] -= con.field(lam)
-    qhat = np.where(at_bound, s / np.where(mag > 0, mag, 1.0), 0.0)
-    radial = qhat[0] * gr[-2] + qhat[1] * gr[-1]
-    released = at_bound & (radial > 0)
+    qhat = np.zeros_like(s)                 # s / |s| on the cells at their bound
+    np.divide(s, mag, out=qhat, where=at_bound & (mag > 0))
+    radial = qhat[0] * gr[-2]
+    radial += qhat[1] * gr[-1]
+    released = radial > 0
+    released &= at_bound
     turning = at_bound & ~released
     free = stick | released
     gt = gr.copy()
-    gt[-2:] = np.where(turning, gr[-2:] - radial * qhat, gr[-2:])
+    cut = radial * qhat                     # the radial part, taken off turning cells
+    cut *= turning
+    gt[-2:] -= cut
     curv = curvature(radial, rho_safe, turning)
     z = np.empty_like(x)
-    z[-2:] = con.keep(direction(M, gt[-2:] / unit, curv / (unit * unit), qhat, a_self,
-                                free, turning, tuning) / unit, free)
+    zs = direction(M, gt[-2:], curv / (unit * unit), qhat, a_self, free, turning, tuning)
+    zs *= 1.0 / (unit * unit)               # direction is linear in the residual
+    z[-2:] = con.keep(zs, free)
     sets: tuple[np.ndarray, ...] = (free, turning)
     entered = bool(released.any())
     if pressure is not None:
