@@ -406,6 +406,27 @@ def test_joint_vector_solve_ends_with_an_exact_product():
     assert np.all(np.hypot(j.q[0], j.q[1]) <= j.bound * (1 + 1e-12))
 
 
+def test_block_sums_weights_are_the_mask_cast_once():
+    """BlockSums.weights: the mask as 0/1 floats, cast once per mask object (the same
+    array handed back for the same mask, a fresh cast for another, with its own counts),
+    and the fit and keep taken with them equal, bit for bit, the products with the
+    boolean mask and the means over boolean-indexed cells to 1e-15."""
+    rng = np.random.default_rng(5)
+    rows = BlockSums([1.0, 2.0])
+    g = rng.normal(size=(2, 8, 8))
+    a, b = rng.random((2, 2, 8, 8)) < 0.4
+    w = rows.weights(a)
+    assert w.dtype == float and np.array_equal(w, a.astype(float))
+    assert rows.weights(a) is w                       # the same mask: no second cast
+    lam = rows.fit(g, b)                              # another mask: cast afresh
+    assert np.array_equal(rows.weights(b), b.astype(float))
+    assert lam == pytest.approx([g[0][b[0]].mean(), g[1][b[1]].mean()], rel=1e-15)
+    means = np.array([g[k][b[k]].mean() for k in range(2)]).reshape(2, 1, 1)
+    z = rows.keep(g, b)
+    assert np.array_equal(z, g - np.multiply(b, rows.field(rows.fit(g, b))))
+    assert np.abs(z - (g - b * means)).max() < 1e-15 * np.abs(g).max()
+
+
 def test_block_sums_rows():
     """Each block its own row: the multipliers are the means over each block's own cells,
     a kept direction sums to zero per block, a restored iterate meets both rows within

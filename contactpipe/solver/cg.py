@@ -250,6 +250,8 @@ class BlockSums(Constraints):
         self.m = int(self.target.size)
         self.rows = None            # no row arrays: every method works block by block
         self._buf = None            # scratch of x's shape for the masked sums
+        self._cells = None          # the last mask given, its 0/1 weights and counts
+        self._weights = self._counts = None
 
     def field(self, lam):
         return np.asarray(lam, dtype=float).reshape(self.m, 1, 1)
@@ -257,22 +259,38 @@ class BlockSums(Constraints):
     def sums_of(self, x):
         return x.reshape(self.m, -1).sum(axis=1)
 
+    def weights(self, cells) -> np.ndarray:
+        """``cells`` (a boolean mask of x's shape, not changed after it is given) as 0/1
+        floats, cast once per mask: a product with a boolean mask casts it each time, at
+        about twice a float product's cost, and box_cg takes several products with one
+        working set (docs/design-choices.md, D33)."""
+        if cells is not self._cells:
+            if self._weights is None or self._weights.shape != cells.shape:
+                self._weights = np.empty(cells.shape)
+            np.copyto(self._weights, cells)
+            self._counts = np.array([max(np.count_nonzero(c), 1)
+                                     for c in cells.reshape(self.m, -1)])
+            self._cells = cells
+        assert self._weights is not None
+        return self._weights
+
     def _means(self, v, cells):
         """The mean of v[k] over block k's cells (m, 1, 1), 0 where a block has none: by a
-        product with the mask in a kept scratch array (a boolean-indexed copy per block
-        cost more). The cells are counted block by block: ``count_nonzero`` along an axis
-        sums a cast copy, slower (docs/design-choices.md, D22)."""
+        product with the mask's weights in a kept scratch array (a boolean-indexed copy
+        per block cost more). The cells are counted block by block: ``count_nonzero``
+        along an axis sums a cast copy, slower (docs/design-choices.md, D22)."""
         if self._buf is None or self._buf.shape != v.shape:
             self._buf = np.empty(v.shape)
-        sums = np.multiply(v, cells, out=self._buf).reshape(self.m, -1).sum(axis=1)
-        counts = np.array([max(np.count_nonzero(c), 1) for c in cells.reshape(self.m, -1)])
-        return (sums / counts).reshape(self.m, 1, 1)
+        w = self.weights(cells)
+        sums = np.multiply(v, w, out=self._buf).reshape(self.m, -1).sum(axis=1)
+        return (sums / self._counts).reshape(self.m, 1, 1)
 
     def fit(self, g, cells):
         return self._means(g, cells).ravel()
 
     def keep(self, z, cells):
-        return z - np.multiply(cells, self._means(z, cells), out=self._buf)
+        means = self._means(z, cells)
+        return z - np.multiply(self.weights(cells), means, out=self._buf)
 
     def restore(self, x, lo, hi, free, movable=None):
         """Σ x[k] = f[k] again by a clipped shift of block k's free cells (then of every
@@ -418,14 +436,15 @@ def _change(x_new, x, scale) -> float:
     return d / scale
 
 
-def _precondition(M, gr, working, con):
+def _precondition(M, gr, working, con, weights=None):
     """The preconditioned gradient z = P M P gr on the working set: M applied to gr (zero off the
     working cells), cut back to them, and projected so that the direction
     keeps the constraint rows (P: the mean removed for the one force row, the rows' null
     space with :class:`Constraints`). P M P is symmetric positive semi-definite on that
-    subspace, so the iteration is preconditioned CG there."""
+    subspace, so the iteration is preconditioned CG there. ``weights``: the working set
+    as 0/1 floats where the caller has them (:meth:`BlockSums.weights`)."""
     z = M(gr)                          # gr: already 0 off the working set
-    z *= working
+    z *= working if weights is None else weights
     if con is None:
         z -= z.sum() / np.count_nonzero(working)
         z *= working
@@ -551,8 +570,9 @@ class _BoxSolve:
             working, moved = self._working_set()
             if not working.any():
                 return 0.0, it
-            np.multiply(self.gr, working, out=grw)  # the reduced gradient on the working set
-            z = grw if M is None else _precondition(M, grw, working, self.con)
+            w = self.con.weights(working) if isinstance(self.con, BlockSums) else working
+            np.multiply(self.gr, w, out=grw)        # the reduced gradient on the working set
+            z = grw if M is None else _precondition(M, grw, working, self.con, w)
             G = _dot(grw, z)
             if not np.isfinite(G):
                 return np.inf, it
