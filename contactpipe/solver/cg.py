@@ -263,7 +263,7 @@ class BlockSums(Constraints):
         """``cells`` (a boolean mask of x's shape, not changed after it is given) as 0/1
         floats, cast once per mask: a product with a boolean mask casts it each time, at
         about twice a float product's cost, and box_cg takes several products with one
-        working set (docs/design-choices.md, D33)."""
+        working set (docs/design-choices.md, D36)."""
         if cells is not self._cells:
             if self._weights is None or self._weights.shape != cells.shape:
                 self._weights = np.empty(cells.shape)
