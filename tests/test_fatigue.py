@@ -191,6 +191,62 @@ def test_min_ball_known_cases():
     assert np.all(r == 0) and np.allclose(c, 1.0)
 
 
+#: The deviatoric path (5-D, Pa) of a point of a worn gross-slip contact's last loop (the
+#: wear-against-cracking study, delta*/delta_gs = 2.5, 32^2, 16 steps, 10^5 cycles): it
+#: dwells, so points 1-4, 7-12 and 15-16 are near-copies (40-230 Pa
+#: apart, on a radius of 4.4e7 Pa), and the ball's support is points 0, 4 and 8.
+DWELLING_PATH = [
+    [-43914505.822, 35916304.597, 60983498.644, -164223566.099, 95689018.105],
+    [-43888823.048, 35780177.379, 60961060.843, -164300882.626, 95785464.432],
+    [-43888814.451, 35780123.291, 60961052.009, -164300918.073, 95785502.557],
+    [-43888805.853, 35780069.220, 60961043.178, -164300953.498, 95785540.672],
+    [-43888797.254, 35780015.149, 60961034.347, -164300988.922, 95785578.786],
+    [-18625453.552, 26455584.111, 44857048.074, -134854307.310, 86442780.773],
+    [-1513642.627, 14732594.086, 25822479.449, -119302675.320, 78473612.513],
+    [4676598.535, 9800612.698, 17229702.349, -114553905.225, 75676936.903],
+    [4676605.521, 9800581.813, 17229699.570, -114553918.527, 75676961.194],
+    [4676612.913, 9800534.070, 17229700.223, -114553951.760, 75677002.767],
+    [4676620.307, 9800486.325, 17229700.876, -114553984.993, 75677044.341],
+    [4676627.700, 9800438.581, 17229701.529, -114554018.226, 75677085.915],
+    [4676635.093, 9800390.836, 17229702.183, -114554051.459, 75677127.489],
+    [-20586699.059, 19124701.927, 33333657.817, -144000817.673, 85019993.203],
+    [-37698513.382, 30847699.939, 52368228.692, -159552447.086, 92989162.663],
+    [-43888725.647, 35779657.106, 60960976.370, -164301181.841, 95785835.780],
+    [-43888717.102, 35779623.022, 60960969.634, -164301194.729, 95785857.934],
+]
+
+
+def _ball_by_supports(Q):
+    """The smallest ball through any support of at most d + 1 points of Q that holds
+    them all (brute force over the supports: an independent check)."""
+    import itertools
+    k, d = Q.shape
+    best = math.inf
+    for size in range(2, d + 2):
+        for sup in itertools.combinations(range(k), size):
+            e = Q[list(sup[1:])] - Q[sup[0]]
+            A = 2 * e @ e.T
+            if np.linalg.cond(A) > 1e12:
+                continue
+            centre = Q[sup[0]] + np.linalg.solve(A, (e ** 2).sum(1)) @ e
+            best = min(best, math.sqrt(((Q - centre) ** 2).sum(1).max()))
+    return best
+
+
+def test_min_ball_of_a_dwelling_path():
+    """A path with near-copies of its support points (above) once did not reach the
+    default tolerance in 100 000 iterations (the pivoting started from the points near
+    the largest distance, crowded by the copies); the ball now agrees with the brute
+    force over supports to 1e-12 (measured 3e-16), at the default tolerance and at
+    1e-12."""
+    P = np.array(DWELLING_PATH)[None]
+    exact = _ball_by_supports(P[0] - P[0].mean(0))
+    for tol in (1e-9, 1e-12):
+        c, r = min_ball(P, tolerance=tol)
+        assert r[0] == pytest.approx(exact, rel=1e-12)
+        assert np.sqrt(((P[0] - c[0]) ** 2).sum(1)).max() <= r[0] * (1 + 1e-12)
+
+
 def test_deviatoric_coordinates_norm_is_sqrt_j2():
     rng = np.random.default_rng(2)
     s = rng.normal(size=(50, 6))

@@ -108,8 +108,9 @@ def _deviator_tensor(u):
 def _polish(Q, u, limit, rounds=12):
     """Exact balls from approximate weights, by pivoting on a guessed support.
 
-    The support S starts as the points within (1 - eta) of the largest distance from the
-    current centre (eta from the current duality gap). Each round puts the centre in
+    The support S starts as the points of positive weight when there are at most d + 1,
+    else the points within (1 - eta) of the largest distance from the current centre
+    (eta from the current duality gap). Each round puts the centre in
     the affine hull of S, equidistant from its points (:func:`_circumcentre`); a point of
     S with a negative barycentric weight leaves S, else the furthest point outside the
     ball joins it (pushing out the point of least weight when S has d + 1 points). A set
@@ -124,6 +125,11 @@ def _polish(Q, u, limit, rounds=12):
     gamma = (u * dist2).sum(1)
     eta = np.clip(8 * (top / np.where(gamma > 0, gamma, 1) - 1), 1e-10, 0.05)
     sup = dist2 >= (1 - eta[:, None]) * top[:, None]
+    # the weights' own support when it is small enough: near-copies of a support point
+    # (a path that dwells) lie within eta of the largest distance and crowd the guess
+    own = u > 1e-12
+    small = (own.sum(1) >= 2) & (own.sum(1) <= d + 1)
+    sup[small] = own[small]
     over = sup.sum(1) > d + 1                   # too many: keep the d + 1 furthest
     if over.any():
         far = np.argsort(-dist2[over], axis=1)[:, :d + 1]
