@@ -50,12 +50,15 @@ RECORDS = 100
 class Jumps:
     """The jump J (cycles per simulated cycle): fixed, or chosen from an error estimate.
 
-    With ``jump = "auto"`` the wear increment per cycle r is compared between the last two
-    simulated cycles, G cycles apart: ρ = (r − r_prev)/G is its change per cycle, and
-    holding r over the next J cycles errs by about ρ J²/2, a fraction |ρ| J / (2|r|) of
-    the J r the jump adds (L2 norms over the grid). J is the largest that keeps that
-    fraction within ``tolerance``, at most twice the last jump; 1 until two cycles are
-    known.
+    With ``jump = "auto"``, r is the wear increment per cycle (a field) of a simulated
+    cycle and D the depth worn over the n cycles completed. ρ = (r − r_prev)/G is the
+    change of r per cycle between the last two simulated cycles, G cycles apart; holding
+    r over the next J cycles errs by about |ρ| J²/2 (largest over the cells). That error
+    is allowed ``tolerance`` × J × max(|r|, |D|/n) (largest over the cells):
+    ``tolerance`` of the wear the jump adds, or of the life's mean wear per cycle once
+    the wear slows down (a contact nearing a state where nothing wears, r → 0), so that
+    summed over the life the error stays of the order of ``tolerance`` × D. J is the
+    largest jump within that, at most twice the last; 1 until two cycles are known.
     """
 
     def __init__(self, jump, tolerance: float):
@@ -64,21 +67,35 @@ class Jumps:
         self.size = 1
         self._rate: np.ndarray | None = None
 
-    def choose(self, rate: np.ndarray) -> int:
-        """The next jump, after a simulated cycle whose wear increment is ``rate`` [m]."""
+    def choose(self, rate: np.ndarray, depth: np.ndarray, cycles: int) -> int:
+        """The next jump, after a simulated cycle whose wear increment is ``rate`` [m],
+        with ``depth`` [m] worn over the ``cycles`` completed so far."""
         if self.fixed is not None:
             return self.fixed
         prev, self._rate = self._rate, np.array(rate, copy=True)
         if prev is None:
             return 1
-        base = float(np.linalg.norm(rate))
-        change = float(np.linalg.norm(rate - prev)) / self.size
-        if base == 0.0 or change == 0.0:
+        scale = max(float(np.linalg.norm(rate)),
+                    float(np.linalg.norm(depth)) / max(int(cycles), 1))
+        change = float(np.linalg.norm(self._rate - prev)) / self.size
+        if scale == 0.0 or change == 0.0:
             size = 2 * self.size
         else:
-            size = min(2 * self.size, int(2.0 * self.tol * base / change))
+            size = min(2 * self.size, int(2.0 * self.tol * scale / change))
         self.size = max(1, size)
         return self.size
+
+    def state(self) -> dict:
+        """The controller's state, for a checkpoint."""
+        out = {"jump_size": np.array(self.size)}
+        if self._rate is not None:
+            out["jump_rate"] = self._rate.copy()
+        return out
+
+    def load_state(self, saved) -> None:
+        """Take the state of a checkpoint (:meth:`state`)."""
+        self.size = int(saved["jump_size"])
+        self._rate = saved.get("jump_rate")
 
 
 def record_cycles(total: int) -> set:
@@ -230,9 +247,7 @@ class _Boundary:
     def take(self, pb, st, n, simulated, jumps, hist):
         arrays = {f"st_{k}": np.array(v, copy=True) for k, v in st.arrays().items()}
         arrays.update({"wear_depth": pb.wear.depth.copy(), "simulated": np.array(simulated),
-                       "jump_size": np.array(jumps.size)})
-        if jumps._rate is not None:
-            arrays["jump_rate"] = jumps._rate.copy()
+                       **jumps.state()})
         self.n, self.arrays, self.lengths, self.hist = n, arrays, hist.lengths(), hist
 
     def save(self, ckpt):
@@ -258,8 +273,7 @@ def _resume(pb, st, ckpt, jumps, hist):
         st.restore({k[3:]: v for k, v in saved.items() if k.startswith("st_")}, 0)
         pb.wear.load_state({"depth": saved["wear_depth"]})
         pb.grid.gap = pb.wear.gap()
-        jumps.size = int(saved["jump_size"])
-        jumps._rate = saved.get("jump_rate")
+        jumps.load_state(saved)
         hist.restore(saved)
         simulated = int(saved["simulated"])
     except (OSError, ValueError, KeyError, EOFError, TypeError, zipfile.BadZipFile) as e:
@@ -321,7 +335,8 @@ def _cycles(pb, st, step, record_of, first, on_step, bar, ckpt, every, start):
         if loop:
             hist.keep(cycle, records)
         size = 1 if cycle == total else \
-            jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0))
+            jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0),
+                         pb.wear.depth.sum(axis=0), cycle)
         size = 1 if cycle == 1 else min(size, total - cycle)   # the first: a start-up
         if cycle in marks or size > 1 or cycle == total:
             hist.add(cycle, pb.wear.total, st.dissipation, p_max, stick_min)
