@@ -2,32 +2,28 @@
 ``contactpipe sweep`` (:mod:`.driver`); the members and their parameters (:mod:`.members`,
 :mod:`.parameters`), where they run (:mod:`.execute`), the folder's manifest
 (:mod:`.manifest`), the sweep and pipeline files (:mod:`.config`) and :func:`open_sweep`
-(:mod:`.combine`)."""
-from .driver import (
-                     LOCK,
-                     MANIFEST,
-                     MODES,
-                     SYNCHRONOUS,
-                     Member,
-                     ScriptReimportError,
-                     SweepFile,
-                     SweepLockedError,
-                     SweepResult,
-                     add_arguments,
-                     archive_state,
-                     derived_parameters,
-                     load_sweep_file,
-                     main,
-                     open_member,
-                     open_sweep,
-                     read_manifest,
-                     read_sweep_file,
-                     register_parameter,
-                     relaxation_time,
-                     sweep,
-                     tau_ratio,
-                     with_window,
-)
+(:mod:`.combine`).
+
+The names below load their module on first use (module ``__getattr__``): reading a sweep
+folder (:func:`open_sweep`, the figures) imports neither the driver nor dask.distributed,
+the simulation or the FFTs."""
+from __future__ import annotations
+
+import importlib
+
+#: Public names and the modules that define them.
+_LAZY = {
+    "sweep": "driver", "SweepResult": "driver", "SweepLockedError": "driver",
+    "ScriptReimportError": "driver", "archive_state": "driver", "add_arguments": "driver",
+    "main": "driver", "LOCK": "driver",
+    "open_sweep": "combine", "open_member": "combine",
+    "load_sweep_file": "config", "read_sweep_file": "config", "SweepFile": "config",
+    "SYNCHRONOUS": "execute",
+    "read_manifest": "manifest", "MANIFEST": "manifest",
+    "Member": "members", "MODES": "members",
+    "register_parameter": "parameters", "derived_parameters": "parameters",
+    "relaxation_time": "parameters", "tau_ratio": "parameters", "with_window": "parameters",
+}
 
 __all__ = ["sweep", "open_sweep", "open_member", "SweepResult", "Member",
            "SweepLockedError", "ScriptReimportError", "register_parameter",
@@ -35,3 +31,16 @@ __all__ = ["sweep", "open_sweep", "open_member", "SweepResult", "Member",
            "tau_ratio", "load_sweep_file", "read_sweep_file", "SweepFile",
            "read_manifest", "archive_state", "add_arguments", "main",
            "MANIFEST", "LOCK", "MODES", "SYNCHRONOUS"]
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

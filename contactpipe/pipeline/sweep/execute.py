@@ -49,12 +49,9 @@ import sys
 import tempfile
 import time
 
-from tqdm.auto import tqdm
-
 from ..._util.files import atomic_path
 from ...archive import open_archive
 from ...exceptions import ArchiveError, ContactpipeError, one_line
-from ...simulation import simulate
 from ..inputs import scene_digest
 
 __all__ = ["execute", "run_member", "land_member", "dask_client", "workers_share_disk",
@@ -120,6 +117,14 @@ def clean_scratch(root) -> list:
             shutil.rmtree(d, ignore_errors=True)
             removed.append(d.name)
     return removed
+
+
+def simulate(scene, path, **options):
+    """:func:`contactpipe.simulate`, imported at the first member: planning, resuming or
+    reading a sweep (and ``contactpipe sweep --help``) need neither the simulation nor
+    the FFTs."""
+    from ...simulation import simulate as run
+    return run(scene, path, **options)
 
 
 def _simulate(scene, path) -> bytes | None:
@@ -313,6 +318,7 @@ def execute(jobs, *, client=None, scheduler=None, n_workers=None, threads_per_wo
     """
     if not jobs:
         return
+    from tqdm.auto import tqdm
     in_place = workers_share_disk(shared_disk, client, scheduler)
     bar = tqdm(total=len(jobs), desc="sweep", unit="member", disable=not progress)
     try:

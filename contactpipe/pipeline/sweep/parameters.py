@@ -30,7 +30,6 @@ import numbers
 from collections.abc import Callable
 
 from ...exceptions import SceneError
-from ...post.fretting import closed_form_boundary
 
 __all__ = ["register_parameter", "derived_parameters", "registered", "relaxation_time",
            "with_window", "tau_ratio", "with_amplitude", "delta_amplitude", "delta_ratio"]
@@ -182,6 +181,7 @@ def delta_amplitude(scene, value):
 def delta_ratio(scene, value):
     """Displacement amplitude delta* = ``value`` x delta_gs, the member's closed-form
     partial / gross slip boundary (:func:`contactpipe.post.fretting.closed_form_boundary`)."""
+    from ...post.fretting import closed_form_boundary  # scipy: only for this parameter
     ratio = _positive("delta_ratio", value)
     d_gs, why = closed_form_boundary(scene)
     if not math.isfinite(d_gs):
