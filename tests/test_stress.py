@@ -494,6 +494,24 @@ def test_lazy_save_writes_one_block_at_a_time(tmp_path, monkeypatch):
             assert np.array_equal(back[v].values, eager[v].values)
 
 
+def test_the_variables_are_named_in_the_order_they_are_computed(sliding):
+    """The stress module names its variables without importing the solver (the FFTs load
+    only when a stress is computed): its names are the solver's six components in the
+    solver's order, then von Mises, and each variable holds what its name says: s33 and
+    von Mises recomputed from the six components at one depth."""
+    assert stress_module.COMPUTED == (*COMPONENTS, "von_mises")
+    st = subsurface_stress(sliding, [1e-4])
+    op = SubsurfaceOperator(*stress_module._grid(sliding), stress_module.body_poisson(sliding))
+    k = -1
+    tr = {q: sliding[q].isel(time=k).values for q in ("p", "q1", "q2") if q in sliding}
+    buf = np.empty((6,) + tr["p"].shape)
+    op.stress(op.traction_spectra(tr), 1e-4, out=buf)
+    got = {v: st[v].isel(time=k, x3=0).values for v in stress_module.COMPUTED}
+    np.testing.assert_allclose(got["s33"], buf[2], rtol=0, atol=1e-9 * np.abs(buf).max())
+    np.testing.assert_allclose(got["von_mises"], von_mises(*buf), rtol=1e-12,
+                               atol=1e-9 * np.abs(buf).max())
+
+
 def test_save_and_open_round_trip(tmp_path, sliding):
     st = subsurface_stress(sliding, [0.0, 1e-4])
     path = save_stress(st, tmp_path / "st.nc")

@@ -47,6 +47,7 @@ from __future__ import annotations
 import os
 import pathlib
 import warnings
+from typing import TYPE_CHECKING
 
 import netCDF4
 import numpy as np
@@ -58,7 +59,9 @@ from ..archive import open_archive
 from ..archive.content import content_problems
 from ..archive.schema import join_problems
 from ..exceptions import ArchiveError
-from ..solver.subsurface import COMPONENTS, SPECTRA_CACHE_BYTES, SubsurfaceOperator, von_mises
+
+if TYPE_CHECKING:
+    from ..solver.subsurface import SubsurfaceOperator
 
 __all__ = ["subsurface_stress", "save_stress", "open_stress", "verify_stress",
            "is_stress_file", "body_poisson", "BODIES", "STRESS_VARIABLES", "check_request",
@@ -75,6 +78,8 @@ STRESS_VARIABLES = {
     "s23": "shear stress s23",
     "von_mises": "von Mises equivalent stress",
 }
+#: The six components (the solver's order), then von Mises: the variables computed.
+COMPUTED = tuple(STRESS_VARIABLES)
 FIELD_DIMS = ("time", "x3", "x1", "x2")
 #: Default bound of the memory of one output block [bytes] (7 variables, float64).
 BLOCK_BYTES = 64 * 2 ** 20
@@ -240,6 +245,7 @@ def _block(arrays, names, depths, op: SubsurfaceOperator, sign_q: float):
     Returns (7, nt, nz, n1, n2) [Pa]: the components of COMPONENTS, then von Mises.
     Depth-outer loop: each depth's spectra serve every instant of the block.
     """
+    from ..solver.subsurface import COMPONENTS, von_mises  # the FFTs: only when computing
     fields = dict(zip(names, (np.asarray(a, dtype=float) for a in arrays), strict=True))
     nt = fields["p"].shape[0]
     for name, f in fields.items():
@@ -301,16 +307,16 @@ def _lazy(fields, names, depths, op, sign_q, tc, zc):
     with warnings.catch_warnings():
         # one block per (instants, depths) pair is the point: more blocks than inputs
         warnings.filterwarnings("ignore", message="Increasing number of chunks")
-        out = da.blockwise(fn, "ctzij", *args, new_axes={"c": len(COMPONENTS) + 1},
+        out = da.blockwise(fn, "ctzij", *args, new_axes={"c": len(COMPUTED)},
                            dtype=float, concatenate=True,
                            meta=np.empty((0, 0, 0, 0, 0), dtype=float))
-    return [out[i] for i in range(len(COMPONENTS) + 1)]
+    return [out[i] for i in range(len(COMPUTED))]
 
 
 def _eager(fields, names, depths, op, sign_q, tc, zc):
     nt = fields["p"].shape[0]
     n1, n2 = op.n1, op.n2
-    res = [np.empty((nt, len(depths), n1, n2)) for _ in range(len(COMPONENTS) + 1)]
+    res = [np.empty((nt, len(depths), n1, n2)) for _ in COMPUTED]
     for t0 in range(0, nt, tc):
         block = [np.asarray(fields[n][t0:t0 + tc].values) for n in names]
         for z0 in range(0, len(depths), zc):
@@ -376,6 +382,7 @@ def subsurface_stress(ds, x3, body: str = "halfspace", time=None, *, chunks=None
         source = str(ds)
         ds = open_archive(ds)
     idx, depths, nu, (n1, n2, d1, d2) = check_request(ds, x3, body, time, poisson)
+    from ..solver.subsurface import SPECTRA_CACHE_BYTES, SubsurfaceOperator  # the FFTs
     names = ["p"] + [q for q in ("q1", "q2") if q in ds.data_vars]
     sel = ds[names].isel(time=idx)
     op = SubsurfaceOperator(n1, n2, d1, d2, nu, backend=fft, threads=threads,
@@ -400,7 +407,7 @@ def _dataset(sel, depths, data, body, nu, attrs, source) -> xr.Dataset:
              "mirrored frame (x1, x2, -x3): x3 into the indenter; in the global frame "
              "s13 and s23 change sign")
     variables = {}
-    for name, arr in zip(list(COMPONENTS) + ["von_mises"], data, strict=True):
+    for name, arr in zip(COMPUTED, data, strict=True):
         variables[name] = xr.Variable(FIELD_DIMS, arr, {
             "units": "Pa", "long_name": f"{STRESS_VARIABLES[name]} in the {body}",
             "comment": "tension > 0; " + frame})
