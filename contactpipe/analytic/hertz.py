@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate, optimize, special
+from scipy import special
 
 from ._common import check_positive
 
@@ -249,6 +249,7 @@ def hertz_ellipsoid(normal_force, radii, composite_modulus) -> HertzEllipsoid:
     -------
     HertzEllipsoid
     """
+    from scipy.optimize import brentq  # ~0.3 s to import: only when needed
     r1, r2 = (float(v) for v in radii)
     check_positive("normal_force [N]", normal_force)
     check_positive("radii [m]", (r1, r2))
@@ -265,7 +266,7 @@ def hertz_ellipsoid(normal_force, radii, composite_modulus) -> HertzEllipsoid:
         lo = -1.5 * np.log(ratio) - 1.0
         while g(lo) < 0.0:
             lo *= 2.0
-        log_y = optimize.brentq(g, lo, 0.0, xtol=1e-15, rtol=4 * np.finfo(float).eps,
+        log_y = brentq(g, lo, 0.0, xtol=1e-15, rtol=4 * np.finfo(float).eps,
                                 maxiter=500)
         y = float(np.exp(log_y))
     rf = special.elliprf(0.0, y, 1.0)       # K(e)
@@ -327,6 +328,7 @@ class FlatPunch:
         removed by the substitution ``x = x_k (1 - v^2)`` before Gauss-Kronrod
         quadrature (:func:`scipy.integrate.quad`); beyond x_k it equals pi/2.
         """
+        from scipy.integrate import quad  # scipy.integrate loads scipy.optimize: ~0.3 s
         a = self.contact_radius
         xe = min(x, a)
         xk = np.sqrt(max(a * a - y * y, 0.0))
@@ -338,7 +340,7 @@ class FlatPunch:
                 arg = y / np.sqrt(max(a * a - xx * xx, 1e-300))
                 return np.arcsin(min(arg, 1.0)) * 2.0 * xk * v
             v0 = np.sqrt(max(1.0 - upper / xk, 0.0))
-            val, _ = integrate.quad(f, v0, 1.0, epsabs=0.0, epsrel=1e-13, limit=200)
+            val, _ = quad(f, v0, 1.0, epsabs=0.0, epsrel=1e-13, limit=200)
             total += val
         elif y == 0.0:
             total = 0.0

@@ -7,7 +7,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate
 
 from ..materials import ExponentialCreep, relaxation_from_creep
 from ._common import sqrt_plus
@@ -73,11 +72,12 @@ def lee_radok_sphere(t, normal_force, radius, young, poisson, creep) -> LeeRadok
 
 def _creep_integral(creep, u0, u1):
     """int_{u0}^{u1} phi(u) du [s] (exact with the creep object's ``mean`` if any)."""
+    from scipy.integrate import quad  # scipy.integrate loads scipy.optimize: ~0.3 s
     if u1 <= u0:
         return 0.0
     if hasattr(creep, "mean"):
         return float(np.squeeze(creep.mean(u0, u1))) * (u1 - u0)
-    return integrate.quad(lambda u: float(creep(u)), u0, u1, limit=200)[0]
+    return quad(lambda u: float(creep(u)), u0, u1, limit=200)[0]
 
 
 def lee_radok_radius(t, load_times, load_values, radius, young, poisson, creep):

@@ -36,7 +36,7 @@ References
 from __future__ import annotations
 
 import numpy as np
-from scipy import integrate, optimize, special
+from scipy import special
 
 from ._common import check_positive, masing_loop
 
@@ -103,6 +103,7 @@ def lubkin_torsion(stick_ratio, friction_coefficient, normal_force, contact_radi
     twist, moment : ndarray
         beta [rad] (inf at c = 0) and M [N m] (0 at c = a, 3 pi mu W a / 16 at c = 0).
     """
+    from scipy.integrate import quad  # scipy.integrate loads scipy.optimize: ~0.3 s
     a = float(contact_radius)
     check_positive("contact_radius", a)
     mu, W = float(friction_coefficient), float(normal_force)
@@ -115,7 +116,7 @@ def lubkin_torsion(stick_ratio, friction_coefficient, normal_force, contact_radi
     for i, r in enumerate(ratio.ravel()):
         c = r * a
         bc = _b(c, a, p0) if c > 0 else np.inf
-        tail, _ = integrate.quad(lambda s: s * s * _b(s, a, p0), c, a, limit=200,
+        tail, _ = quad(lambda s: s * s * _b(s, a, p0), c, a, limit=200,
                                  epsabs=0.0, epsrel=1e-12)
         twist.flat[i] = 0.5 * mu * compliance * bc
         moment.flat[i] = 8.0 * mu / 3.0 * ((c ** 3 * bc if c > 0 else 0.0) + 3.0 * tail)
@@ -126,6 +127,7 @@ def lubkin_torsion(stick_ratio, friction_coefficient, normal_force, contact_radi
 def lubkin_moment(twist, friction_coefficient, normal_force, contact_radius, compliance):
     """Torque M [N m] at a twist beta [rad] (monotonic loading from rest), from
     :func:`lubkin_torsion` by solving beta(c) = |beta| for c (sign of beta kept)."""
+    from scipy.optimize import brentq  # ~0.3 s to import: only when needed
     a = float(contact_radius)
     mu, W = float(friction_coefficient), float(normal_force)
     p0 = 3.0 * W / (2.0 * np.pi * a * a)
@@ -143,7 +145,7 @@ def lubkin_moment(twist, friction_coefficient, normal_force, contact_radius, com
         if gap(lo) <= 0:
             out.flat[i] = np.sign(b) * full_slip_torque(mu, W, a)
             continue
-        r = optimize.brentq(gap, lo, 1.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+        r = brentq(gap, lo, 1.0, xtol=1e-15, rtol=4 * np.finfo(float).eps)
         out.flat[i] = np.sign(b) * lubkin_torsion(r, mu, W, a, compliance)[1]
     return out.reshape(np.shape(twist)) if np.ndim(twist) else float(out[0])
 
