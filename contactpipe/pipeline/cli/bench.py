@@ -74,9 +74,6 @@ import numpy as np
 from ..._util.files import check_output_path, write_text
 from ...exceptions import SceneError
 from ...scene import Scene
-from ...simulation import simulate
-from ...solver.convolution import Convolver
-from ...solver.options import tuning_from
 from .bench_wear import QUICK_WEAR, WEAR_COLUMNS, bench_wear
 
 __all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
@@ -118,6 +115,7 @@ def _floor_ms(n, backend, threads, blocks=3):
     solver makes its own (same backend, threads and planner; with FFTW's wisdom, the same
     plans); the least of ``blocks`` timed blocks, so that a busy moment does not count.
     """
+    from ...solver.convolution import Convolver  # pyfftw: only when a case runs
     conv = Convolver(n, n, backend=backend, threads=threads)
     k = conv.kernel_spectrum(np.ones((2 * n, 2 * n)))
     x = np.random.default_rng(0).normal(size=(n, n))
@@ -147,6 +145,7 @@ def timed_run(scene, form=None, tuning=None):
     leave them out. NaN for a run of one instant. ``tuning``: the solver core's switches
     (:class:`contactpipe.solver.options.Tuning`; None: the defaults).
     """
+    from ...simulation import simulate  # the solver and the FFTs: only when a case runs
     stamps = []
     load = _load()
     kw = {} if form is None else {"tangential": form}
@@ -188,6 +187,7 @@ def _cells(r):
 
 
 def bench_normal(grids, backend, threads):
+    from ...simulation import simulate  # the solver and the FFTs: only when a case runs
     rows = []
     print("normal contact: Hertz, steel on steel, W = 1 kN, R = 18 mm, grid over 4a, tol "
           "1e-10; one instant, solved a second time (setup left out)")
@@ -250,6 +250,7 @@ def bench_fretting(grids, backend, threads, steps=40, tuning=None):
 
 
 def bench_memory(backend, threads, n=64, steps=1000):
+    from ...simulation import simulate  # the solver and the FFTs: only when a case runs
     rows = []
     print(f"memory: per-step cost of the viscoelastic history ({n}², rigid sphere, W stepped, "
           "window 2 s); the recursion keeps it flat")
@@ -308,6 +309,7 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",), tuni
 
 
 def bench_long_run(backend, threads, n=256, steps=2000):
+    from ...simulation import simulate  # the solver and the FFTs: only when a case runs
     sc = _scene(indenter={"material": "rigid"},
                 halfspace={"material": "viscoelastic", "young": E_STEEL, "poisson": 0.5,
                            "creep": "maxwell", "relaxation_time": 1.0},
@@ -437,6 +439,7 @@ def _run_case(case, args, tuning=None):
 
 
 def main(args) -> int:
+    from ...solver.options import tuning_from
     for case in args.cases:
         if case not in CASES:
             raise SceneError(f"bench case {case!r}: allowed {', '.join(CASES)}")

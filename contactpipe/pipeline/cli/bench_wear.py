@@ -29,7 +29,6 @@ import time
 import numpy as np
 
 from ...scene import Scene
-from ...simulation import simulate
 
 __all__ = ["bench_wear", "wear_scene", "WEAR_COLUMNS", "QUICK_WEAR"]
 
@@ -66,6 +65,7 @@ def wear_scene(n, steps, cycles, jump, coefficient, backend="auto", threads=1) -
 def _run(scene, folder: pathlib.Path, name: str):
     """(final wear depth, worn volume, cycles simulated, wall [s], load) of a run written
     to ``folder``."""
+    from ...simulation import simulate  # the solver and the FFTs: only when a case runs
     load = _load()
     t0 = time.perf_counter()
     ds = simulate(scene, folder / f"{name}.nc")
