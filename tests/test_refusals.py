@@ -381,6 +381,59 @@ def test_the_top_level_help_imports_no_stage():
     assert out[:2] == ["0 True []", "['contactpipe']"], "\n".join(out) + err[-2000:]
 
 
+#: What a reading stage never needs: the cluster, the FFTs, the solver, the simulation,
+#: the sweep's driver and its runner (which import those), scipy's optimisers and
+#: quadratures (0.3 s: the closed forms import them when they call them), the progress bar.
+_NOT_READING = ("'distributed', 'pyfftw', 'tqdm', 'scipy.optimize', 'scipy.integrate', "
+                "'contactpipe.solver', 'contactpipe.simulation', "
+                "'contactpipe.pipeline.sweep.driver', 'contactpipe.pipeline.sweep.execute'")
+
+
+def _loaded(names=_NOT_READING):
+    """Code printing those of ``names`` (modules or packages) that are loaded."""
+    return f"print(sorted(set(sys.modules) & {{{names}}}))\n"
+
+
+def test_the_plot_command_draws_without_the_solver_or_a_cluster(work, tmp_path):
+    """``contactpipe plot`` of an archive (the profiles with their closed form, and the
+    maps) and of a stress file imports what it reads and draws with (xarray, netCDF4,
+    dask's arrays, matplotlib, the figure modules, the closed forms) and none of
+    :data:`_NOT_READING`. It imported them all (the figures imported the sweep package,
+    whose driver pulled the simulation, pyfftw and dask.distributed; the closed forms
+    scipy.optimize; dask looked for a distributed client before each read): the plot of
+    a 24 x 24 archive spent 2.1-2.5 s importing, now 1.2-1.4 s."""
+    stress = _stress_file(work, tmp_path / "stress.nc")
+    figs = [tmp_path / f"{k}.png" for k in ("profiles", "maps", "stress")]
+    argv = [["plot", str(work / "run.nc"), "-o", str(figs[0])],
+            ["plot", str(work / "run.nc"), "-o", str(figs[1]), "--kind", "maps"],
+            ["plot", str(stress), "-o", str(figs[2])]]
+    out, err = _in_a_fresh_process(
+        "import sys, contextlib, io\nfrom contactpipe.pipeline import cli\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        f"    codes = [cli.main(a) for a in {argv!r}]\n"
+        "print(codes)\n" + _loaded())
+    assert out[:2] == ["[0, 0, 0]", "[]"], "\n".join(out) + err[-2000:]
+    assert {"matplotlib", "netCDF4", "xarray"} <= set(eval(out[2]))   # noqa: S307 - a list
+    assert all(f.stat().st_size > 10_000 for f in figs)
+
+
+def test_the_reading_stages_import_neither_the_solver_nor_a_cluster():
+    """The parsers of ``bench``, ``plot`` (every figure module: the fretting map's reads
+    the sweep folder), ``compare`` and ``sweep`` (their ``--help``), built in that
+    order, import none of :data:`_NOT_READING` but, for ``sweep``, its driver and
+    runner: the members run on dask workers, each importing the simulation when it
+    starts one. ``bench --help`` loads no package outside the standard library but
+    numpy (it loaded the simulation, the solver and pyfftw)."""
+    out, err = _in_a_fresh_process(
+        "import sys\nfrom contactpipe.pipeline.cli.main import build_parser\n"
+        "build_parser('bench')\n" + _THIRD_PARTY + _loaded()
+        + "for command in ('plot', 'compare'):\n    build_parser(command)\n" + _loaded()
+        + "build_parser('sweep')\n"
+        + _loaded(_NOT_READING.split(", 'contactpipe.pipeline.sweep.driver'")[0]))
+    assert out[:4] == ["['contactpipe', 'numpy']", "[]", "[]", "[]"], \
+        "\n".join(out) + err[-2000:]
+
+
 def test_public_names_load_on_first_use():
     """Every name of contactpipe.__all__ resolves; cp.fatigue stays the function when
     the module of that name is imported."""

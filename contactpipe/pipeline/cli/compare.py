@@ -15,6 +15,7 @@ import pathlib
 from ..._util.files import check_output_dir, check_output_path
 from ..compare import tables as compare_stage
 from ..figures.plot import plot_profiles, save_figure
+from ..inputs import local_reads
 
 __all__ = ["add_arguments", "main"]
 
@@ -59,6 +60,11 @@ def _check_outputs(args) -> None:
 
 def main(args) -> int:
     _check_outputs(args)
+    with local_reads():
+        return _compare(args)
+
+
+def _compare(args) -> int:
     table = compare_stage.compare(args.archive, args.reference, out=args.output)
     print(compare_stage.format_table(table))
     if args.output is not None:

@@ -37,7 +37,6 @@ import json
 import pathlib
 import sys
 
-import dask
 import netCDF4
 import numpy as np
 import xarray as xr
@@ -50,6 +49,7 @@ from ...post.fatigue import CRITERIA, fatigue
 from ...post.stress import BODIES, check_request, open_stress, save_stress, subsurface_stress
 from ...post.wear_fatigue import fatigue_over_cycles
 from ..figures.plot import plot_stress, save_figure
+from ..inputs import local_reads
 from ..sweep.config import StressSpec
 
 __all__ = ["add_arguments", "main", "parse_depths", "parse_time", "parse_constants",
@@ -206,11 +206,16 @@ def main(args) -> int:
             raise
         print(f"contactpipe: error: {one_line(err, with_type=False)}", file=sys.stderr)
         return 2
-    if args.over_cycles is not None:
-        try:
-            return _over_cycles(args, ds, depths)
-        finally:
-            ds.close()
+    with local_reads():
+        if args.over_cycles is not None:
+            try:
+                return _over_cycles(args, ds, depths)
+            finally:
+                ds.close()
+        return _compute(args, ds, depths, time)
+
+
+def _compute(args, ds, depths, time) -> int:
     try:
         st = subsurface_stress(ds, depths, body=args.body, time=time, fft=args.fft,
                                threads=args.threads)
@@ -345,7 +350,7 @@ def write_stress_product(archive, target, spec: StressSpec) -> dict:
     time = {"last": None, "all": "all"}[spec.time] if isinstance(spec.time, str) else \
         list(spec.time)
     make_folder(target.parent)
-    with dask.config.set(scheduler="synchronous"), _small_chunk_cache(), \
+    with local_reads(synchronous=True), _small_chunk_cache(), \
             open_archive(archive, verify=True) as ds:
         st = subsurface_stress(ds, list(spec.depths), body=spec.body, time=time)
         st.attrs[SETTINGS_ATTR] = json.dumps(spec.settings(), sort_keys=True)

@@ -39,13 +39,12 @@ from __future__ import annotations
 import math
 import os
 
-import dask
 import numpy as np
 import xarray as xr
 
 from ...archive import open_archive
 from ...exceptions import ArchiveError
-from ..inputs import grid_of, radius_of_area, scene_of
+from ..inputs import grid_of, local_reads, radius_of_area, scene_of
 from .output import TABLE_SUFFIXES, check_table_path, format_table, write_table
 from .reference import LOADING_FORMS, closed_form_solution
 
@@ -641,7 +640,7 @@ def compare(archive, reference=None, *, out=None) -> xr.Dataset:
         ds, label = load_dataset(archive)
         if ds is not archive:
             opened.append(ds)
-        with dask.config.set(scheduler="synchronous"):     # many small reads: no thread pool
+        with local_reads(synchronous=True):     # many small reads: no thread pool
             if reference is None:
                 table = _compare_closed_form(ds, label)
             else:

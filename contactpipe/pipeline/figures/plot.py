@@ -54,7 +54,7 @@ import numpy as np
 from ..._util.files import atomic_path, check_output_dir, check_output_path, make_folder
 from ..._util.interrupts import raise_if_signalled
 from ...exceptions import ArchiveError, ContactpipeError, SceneError, one_line
-from ..inputs import centre_rows, grid_of, scene_of
+from ..inputs import centre_rows, grid_of, local_reads, scene_of
 from ..sweep.combine import MANIFEST
 from .canvas import DPI, FIGSIZE, new_figure
 from .common import (
@@ -480,14 +480,8 @@ def main(args) -> int:
         return 2
     inputs = _inputs(source)
     try:
-        if kind == "all":
-            check_output_dir(args.output, "figure folder", inputs=inputs)
-            written = standard_figures(source, args.output, "",
-                                       -1 if args.instant is None else args.instant)
-        else:
-            target = check_output_path(args.output, "figure", inputs=inputs)
-            check_output_dir(target.parent, "folder of the figure")
-            written = [save_figure(_draw(kind, source, args), target)]
+        with local_reads():
+            written = _write(kind, source, args, inputs)
     except ValueError as err:            # --instant, --variable not in this input: bad input
         if getattr(args, "debug", False) or isinstance(err, ContactpipeError):
             raise
@@ -496,3 +490,14 @@ def main(args) -> int:
     for path in written:
         print(f"wrote {path}")
     return 0
+
+
+def _write(kind, source, args, inputs) -> list:
+    """Check the output and write the figure(s) ``kind`` of ``source``: their paths."""
+    if kind == "all":
+        check_output_dir(args.output, "figure folder", inputs=inputs)
+        return standard_figures(source, args.output, "",
+                                -1 if args.instant is None else args.instant)
+    target = check_output_path(args.output, "figure", inputs=inputs)
+    check_output_dir(target.parent, "folder of the figure")
+    return [save_figure(_draw(kind, source, args), target)]
