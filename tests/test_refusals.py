@@ -400,8 +400,7 @@ def test_the_plot_command_draws_without_the_solver_or_a_cluster(work, tmp_path):
     dask's arrays, matplotlib, the figure modules, the closed forms) and none of
     :data:`_NOT_READING`. It imported them all (the figures imported the sweep package,
     whose driver pulled the simulation, pyfftw and dask.distributed; the closed forms
-    scipy.optimize; dask looked for a distributed client before each read): the plot of
-    a 24 x 24 archive spent 2.1-2.5 s importing, now 1.2-1.4 s."""
+    scipy.optimize; dask looked for a distributed client before each read)."""
     stress = _stress_file(work, tmp_path / "stress.nc")
     figs = [tmp_path / f"{k}.png" for k in ("profiles", "maps", "stress")]
     argv = [["plot", str(work / "run.nc"), "-o", str(figs[0])],
