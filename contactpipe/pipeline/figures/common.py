@@ -19,11 +19,12 @@ from ..compare.reference import ClosedForm, closed_form_for, closed_form_solutio
 from ..inputs import radius_of_area, scene_of
 from ..sweep.combine import open_sweep
 
-__all__ = ["input_kind", "open_input", "has_tangential_load", "figure_applies"]
+__all__ = ["input_kind", "open_input", "has_tangential_load", "figure_applies",
+           "is_rough_archive"]
 
 KINDS = ("profiles", "maps", "hysteresis", "radii")
 INPUTS = {
-    "archive": ("an archive", KINDS + ("wear", "all")),
+    "archive": ("an archive", KINDS + ("wear", "rough", "all")),
     "stress": ("a stress file", ("stress",)),
     "sweep": ("a sweep folder", ("sweep", "fretting-map")),
 }
@@ -99,12 +100,21 @@ def has_tangential_load(ds) -> bool:
     return _frictional(ds) and bool(np.any(np.abs(np.asarray(ds["T1"].values)) > 0))
 
 
+def is_rough_archive(ds) -> bool:
+    """True for the archive of a rough or measured surface: it holds the initial gap
+    ``h0`` (written for ``geometry.shape = "rough"`` or ``"surface"``)."""
+    return "h0" in ds.data_vars
+
+
 def figure_applies(kind: str, ds) -> bool:
-    """Whether the figure ``kind`` (one of :data:`KINDS`, or ``wear``) applies to an
-    archive: the fretting loop needs a tangential load, the wear figure a wear run (a
-    ``cycle`` dimension), the others always apply."""
+    """Whether the figure ``kind`` (one of :data:`KINDS`, ``wear`` or ``rough``) applies to
+    an archive: the fretting loop needs a tangential load, the wear figure a wear run (a
+    ``cycle`` dimension), the rough figure an initial gap ``h0``, the others always
+    apply."""
     if kind == "wear":
         return "cycle" in ds.dims
+    if kind == "rough":
+        return is_rough_archive(ds)
     return has_tangential_load(ds) if kind == "hysteresis" else True
 
 

@@ -1,6 +1,6 @@
 """Standard figures of an archive, a stress file or a sweep (matplotlib, never pyplot).
 
-``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|wear|all``;
+``contactpipe plot ARCHIVE.nc -o FIG.png --kind profiles|maps|hysteresis|radii|wear|rough|all``;
 ``contactpipe plot STRESS.nc -o FIG.png [--kind stress] [--variable FIELD]`` for a stress
 file (written by ``contactpipe stress`` or the pipeline's ``[stress]`` product);
 ``contactpipe plot SWEEP_DIR/ -o FIG.png [--kind sweep] [--variable NAME]`` for a sweep
@@ -20,6 +20,9 @@ and exit status 2, nothing written.
 - :func:`plot_wear`: the wear figure of a wear run (worn profile at several cycles, wear
   depth map, pressure, worn volume and dissipated energy against cycles;
   :mod:`contactpipe.pipeline.figures.wear`).
+- :func:`plot_rough`: maps of h0, p and the status with its clusters at one instant, the
+  contact-area and stick fractions against W (or time) and the cluster counts against
+  time, readable at 512^2 and more (:mod:`contactpipe.pipeline.figures.rough`).
 - :func:`plot_sweep`: one curve per member of a combined sweep Dataset.
 - :func:`plot_fretting_map`: the regime of each member of a fretting sweep over the
   displacement amplitude and mu or W, with the closed-form boundary
@@ -73,9 +76,11 @@ from .common import (
     figure_applies,
     has_tangential_load,
     input_kind,
+    is_rough_archive,
     open_input,
 )
 from .fretting import plot_energy_ratio, plot_fretting_map
+from .rough import plot_rough
 from .series import plot_hysteresis, plot_radii
 from .stress import plot_stress as draw_stress
 from .stress import plot_stress_section, plot_stress_surface
@@ -84,7 +89,7 @@ from .wear import is_wear_archive, plot_wear
 
 __all__ = ["plot_profiles", "plot_maps", "plot_hysteresis", "plot_radii", "plot_sweep",
            "plot_stress", "plot_stress_section", "plot_stress_surface", "plot_fretting_map",
-           "plot_energy_ratio", "plot_wear", "standard_figures",
+           "plot_energy_ratio", "plot_wear", "plot_rough", "standard_figures",
            "save_figure", "new_figure", "has_tangential_load", "figure_applies",
            "input_kind", "open_input", "add_arguments", "main", "FIGSIZE", "DPI", "KINDS",
            "INPUTS"]
@@ -383,13 +388,14 @@ def plot_stress(st, field=None, instant=-1, *, fig=None):
 
 # --------------------------------------------------------------------------- all
 
-def standard_figures(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
+def standard_figures(ds, out_dir, prefix="", instant=None) -> list[pathlib.Path]:
     """Every figure that applies to an archive, written into ``out_dir``.
 
     ``<prefix>profiles.png`` and ``<prefix>maps.png`` (at ``instant``) always,
     ``<prefix>hysteresis.png`` for a frictional archive with a tangential load,
-    ``<prefix>radii.png`` always, ``<prefix>wear.png`` for the archive of a wear run
-    (:func:`save_figure` each).
+    ``<prefix>radii.png`` always, ``<prefix>wear.png`` for the archive of a wear run,
+    ``<prefix>rough.png`` for the archive of a rough or measured surface (it holds
+    ``h0``; at ``instant``, default the peak tangential load) (:func:`save_figure` each).
 
     Returns
     -------
@@ -403,12 +409,15 @@ def standard_figures(ds, out_dir, prefix="", instant=-1) -> list[pathlib.Path]:
     """
     out_dir = check_output_dir(out_dir, "figure folder")
     with _dataset(ds) as ds:
-        drawn = [("profiles", plot_profiles(ds)), ("maps", plot_maps(ds, instant))]
+        drawn = [("profiles", plot_profiles(ds)),
+                 ("maps", plot_maps(ds, -1 if instant is None else instant))]
         if has_tangential_load(ds):
             drawn.append(("hysteresis", plot_hysteresis(ds)))
         drawn.append(("radii", plot_radii(ds)))
         if is_wear_archive(ds):
             drawn.append(("wear", plot_wear(ds)))
+        if is_rough_archive(ds):
+            drawn.append(("rough", plot_rough(ds, instant)))
     return [save_figure(fig, out_dir / f"{prefix}{kind}.png") for kind, fig in drawn]
 
 
@@ -424,8 +433,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--kind", choices=sorted({k for _, ks in INPUTS.values() for k in ks}),
                         default=None,
                         help="which figure: for an archive profiles (default), maps, "
-                             "hysteresis, radii, wear (a wear run) or all; for a stress "
-                             "file stress; for a sweep folder sweep (default) or "
+                             "hysteresis, radii, wear (a wear run), rough (maps with "
+                             "clusters, contact and stick fractions) or all; for a "
+                             "stress file stress; for a sweep folder sweep (default) or "
                              "fretting-map")
     parser.add_argument("--instant", type=int, default=None,
                         help="instant index K (negative from the end): the one profile, "
@@ -468,6 +478,8 @@ def _draw(kind, source, args):
         return plot_maps(source, k)
     if kind == "wear":
         return plot_wear(source)
+    if kind == "rough":
+        return plot_rough(source, args.instant)
     return plot_hysteresis(source) if kind == "hysteresis" else plot_radii(source)
 
 
@@ -496,8 +508,7 @@ def _write(kind, source, args, inputs) -> list:
     """Check the output and write the figure(s) ``kind`` of ``source``: their paths."""
     if kind == "all":
         check_output_dir(args.output, "figure folder", inputs=inputs)
-        return standard_figures(source, args.output, "",
-                                -1 if args.instant is None else args.instant)
+        return standard_figures(source, args.output, "", args.instant)
     target = check_output_path(args.output, "figure", inputs=inputs)
     check_output_dir(target.parent, "folder of the figure")
     return [save_figure(_draw(kind, source, args), target)]
