@@ -46,8 +46,10 @@ def _title_counts(fig):
     return tuple(int(c) for c in COUNTS.search(_panels(fig)[0].get_title()).groups())
 
 
-def _lines(ax):
-    return {line.get_label(): line for line in ax.get_lines()}
+def _lines(where):
+    """The labelled lines of an Axes, or of every Axes of a Figure (twin axes included)."""
+    axes = where.axes if hasattr(where, "savefig") else [where]
+    return {line.get_label(): line for ax in axes for line in ax.get_lines()}
 
 
 def test_rough_figure_of_a_real_run(rough_run, tmp_path):
@@ -67,7 +69,7 @@ def test_rough_figure_of_a_real_run(rough_run, tmp_path):
                                   int(want.slip_clusters))
     assert want.stick_clusters >= 1 and want.slip_clusters >= 1
     d = float(ds.x1[1] - ds.x1[0])
-    lines = _lines(_panels(fig)[1])
+    lines = _lines(fig)
     ca, sa = ds.contact_area.values, ds.stick_area.values
     np.testing.assert_allclose(lines["contact area / grid area"].get_ydata(),
                                ca / (N * N * d * d), rtol=1e-12)
@@ -115,7 +117,7 @@ def test_rough_figure_at_512_is_quick_and_exact(tmp_path):
     assert _title_counts(fig) == (int(want.contact_clusters), int(want.stick_clusters),
                                   int(want.slip_clusters))
     assert want.contact_clusters > 10
-    lines = _lines(_panels(fig)[1])
+    lines = _lines(fig)
     area = 512 * 512 * float(ds.x1[1] - ds.x1[0]) ** 2
     frac = lines["contact area / grid area"]
     np.testing.assert_allclose(frac.get_ydata(), ds.contact_area.values / area, rtol=1e-12)
@@ -139,7 +141,9 @@ def test_rough_figure_strides_the_cluster_counts():
 
 def test_a_smooth_archive_plots_without_h0(tmp_path):
     """Any archive plots: a smooth sphere's (no h0) gives the pressure and status maps
-    only, one contact cluster at the last instant."""
+    only, one contact cluster at the last instant; a frictionless one names its status
+    separated or contact, its fraction panel and counts have no stick, and its fractions
+    are against W, which rises."""
     from helpers import fretting_scene
     ds = cp.simulate(fretting_scene(n=16, steps=5))
     assert "h0" not in ds
@@ -147,6 +151,15 @@ def test_a_smooth_archive_plots_without_h0(tmp_path):
     titles = [ax.get_title() for ax in fig.axes]
     assert "initial gap h0" not in titles and "pressure p" in titles
     assert _title_counts(fig)[0] == 1
+    smooth = cp.simulate(make_scene(grid={"points": [16, 16]}, time={"steps": 2},
+                                    load={"time": [0.0, 1.0], "normal_force": [W / 4, W]}))
+    assert "stick_area" not in smooth
+    fig = plot.plot_rough(smooth)
+    assert _panels(fig)[0].get_title() == "status: 1 contact clusters (frictionless)"
+    lines = _lines(fig)
+    assert "stick area / contact area" not in lines and "stick" not in lines
+    np.testing.assert_array_equal(lines["contact area / grid area"].get_xdata(),
+                                  smooth.W.values)
 
 
 def test_cli_draws_rough_and_all_includes_it(rough_run, tmp_path, capsys):
@@ -158,3 +171,22 @@ def test_cli_draws_rough_and_all_includes_it(rough_run, tmp_path, capsys):
     assert cli_main(["plot", str(rough_run), "-o", str(tmp_path / "all"),
                      "--kind", "all"]) == 0
     assert (tmp_path / "all" / "rough.png").is_file()
+
+
+def test_pipeline_draws_the_rough_figure_of_each_member(tmp_path, capsys):
+    """contactpipe pipeline over a rough sphere (16^2 cells, 2 steps, two seeds) with
+    plot.figures = ["rough", "sweep"]: each member gets its rough figure."""
+    geo = {"shape": "rough", "hurst": 0.8, "rms_slope": 0.02, "seed": 1,
+           "wavelengths": [SIDE / 2, 4 * SIDE / 16], "form": "sphere", "radius": R}
+    base = make_scene(geometry=geo, grid={"points": [16, 16], "size": [SIDE, SIDE]},
+                      time={"steps": 2})
+    (tmp_path / "base.toml").write_text(base.to_toml())
+    (tmp_path / "pipeline.toml").write_text(
+        'name = "rough-pipe"\nout = "runs"\n[sweep]\nbase = "base.toml"\n'
+        '[sweep.axes]\n"geometry.seed" = [1, 2]\n'
+        '[plot]\nfigures = ["rough", "sweep"]\n')
+    assert cli_main(["pipeline", str(tmp_path / "pipeline.toml"), "--scheduler",
+                     "synchronous", "--no-progress"]) == 0
+    assert "0 failed" in capsys.readouterr().out
+    figs = sorted((tmp_path / "runs" / "figures").glob("*-rough.png"))
+    assert len(figs) == 2 and all(imread(f).shape[:2] == (500, 800) for f in figs)

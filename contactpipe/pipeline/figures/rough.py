@@ -138,32 +138,38 @@ def _image(fig, ax, field, extent, cmap, label, **kw):
     return im, bar
 
 
-def _status_map(fig, ax, status, extent, x1, x2):
+def _status_map(fig, ax, status, extent, grid_x, frictional):
     """The status with contact (grey) and stick (black) clusters outlined; returns the
-    counts (contact, stick, slip)."""
+    counts (contact, stick, slip). Frictionless: separated or in contact only."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
-    cmap = ListedColormap(STATUS_COLOURS)
+    if frictional:
+        colours, bounds, ticks = STATUS_COLOURS, [-0.5, 0.5, 1.5, 2.5], [0, 1, 2]
+        names = ["separated", "stick", "slip"]
+    else:                                  # every contact cell slips
+        colours, bounds, ticks = STATUS_COLOURS[::2], [-0.5, 0.5, 2.5], [0, 1.5]
+        names = ["separated", "contact"]
+    cmap = ListedColormap(colours)
     # colours blended after mapping (rgba stage): a downsampled pixel shows the mix of
     # its cells, not a status between two
     _, bar = _image(fig, ax, status.astype(float), extent, cmap, None,
-                    norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5], cmap.N),
-                    interpolation_stage="rgba")
-    bar.set_ticks([0, 1, 2])
-    bar.ax.set_yticklabels(["separated", "stick", "slip"], fontsize=6)
+                    norm=BoundaryNorm(bounds, cmap.N), interpolation_stage="rgba")
+    bar.set_ticks(ticks)
+    bar.ax.set_yticklabels(names, fontsize=6)
     contact, stick = status != STATUS_SEPARATED, status == STATUS_STICK
     lw = 0.6 if max(status.shape) <= 128 else 0.3
     for mask, colour in ((contact, "0.3"), (stick, "k")):
         if mask.any() and not mask.all():
-            ax.contour(x1 * 1e3, x2 * 1e3, mask.T.astype(np.float32), levels=[0.5],
-                       colors=colour, linewidths=lw).set_rasterized(True)
+            ax.contour(grid_x[0] * 1e3, grid_x[1] * 1e3, mask.T.astype(np.float32),
+                       levels=[0.5], colors=colour, linewidths=lw).set_rasterized(True)
     counts = (count_clusters(contact), count_clusters(stick),
               count_clusters(status == STATUS_SLIP))
     ax.set_title(f"status: {counts[0]} contact, {counts[1]} stick, {counts[2]} slip "
-                 "clusters", fontsize=8)
+                 "clusters" if frictional else
+                 f"status: {counts[0]} contact clusters (frictionless)", fontsize=8)
     return counts
 
 
-def _maps(fig, axes, ds, k):
+def _maps(fig, axes, ds, k, frictional):
     x1, x2, extent = _extent(ds)
     panels = list(axes)
     if "h0" in ds:
@@ -177,7 +183,7 @@ def _maps(fig, axes, ds, k):
     _image(fig, panels[0], p / f, extent, "viridis", f"p [{unit}]", vmin=0.0)
     panels[0].set_title("pressure p", fontsize=8)
     counts = _status_map(fig, panels[1], np.asarray(ds["status"].isel(time=k).values),
-                         extent, x1, x2)
+                         extent, (x1, x2), frictional)
     for ax in axes:
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
@@ -186,33 +192,40 @@ def _maps(fig, axes, ds, k):
     return counts
 
 
-def _fractions(ax, ds, k, series):
+def _fraction_axis(ax, x, y, style, colour, label):
+    ax.plot(x, y, style, ms=2.5, lw=1.1, color=colour, label=label)
+    top = float(np.nanmax(y)) if np.any(np.isfinite(y)) else 1.0
+    ax.set_ylim(0.0, min(1.0, 1.1 * top) if top > 0 else 1.0)
+    ax.set_ylabel(label, fontsize=7, color=colour)
+    ax.tick_params(labelsize=6)
+
+
+def _fractions(ax, k, series):
+    """The contact-area fraction (left axis) and the stick fraction (right axis), each
+    scaled to its own values from 0."""
     x = series["x"]
-    ax.plot(x, series["contact_fraction"], "o-", ms=2.5, lw=1.1, color="C0",
-            label="contact area / grid area")
+    _fraction_axis(ax, x, series["contact_fraction"], "o-", "C0",
+                   "contact area / grid area")
     if series["stick_fraction"] is not None:
-        ax.plot(x, series["stick_fraction"], "s-", ms=2.5, lw=1.1, color="C3",
-                label="stick area / contact area")
-    ax.axvline(x[k], color="0.5", lw=0.8, ls=":", label="instant of the maps")
+        _fraction_axis(ax.twinx(), x, series["stick_fraction"], "s-", "C3",
+                       "stick area / contact area")
+    ax.axvline(x[k], color="0.5", lw=0.8, ls=":")
     ax.set_xlabel("normal force W [N]" if series["against"] == "W" else "time t [s]",
                   fontsize=7)
-    ax.set_ylabel("fraction", fontsize=7)
-    ax.set_ylim(0.0, 1.05)
     ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
-    ax.tick_params(labelsize=6)
     what = "W" if series["against"] == "W" else "time"
     ax.set_title(f"fractions against {what} ({series['why']})", fontsize=8)
-    ax.legend(fontsize=6, loc="best")
 
 
-def _counts(ax, ds, k, ks, status):
+def _counts(ax, ds, k, ks, status, frictional):
     """Cluster counts at the instants ``ks`` (``status`` their maps) against time."""
     t = np.asarray(ds["time"].values, float)
-    for n, (name, test) in enumerate((("contact", lambda s: s != STATUS_SEPARATED),
-                                      ("stick", lambda s: s == STATUS_STICK),
-                                      ("slip", lambda s: s == STATUS_SLIP))):
+    kinds = (("contact", lambda s: s != STATUS_SEPARATED, "k"),
+             ("stick", lambda s: s == STATUS_STICK, STATUS_COLOURS[1]),
+             ("slip", lambda s: s == STATUS_SLIP, STATUS_COLOURS[2]))
+    for name, test, colour in kinds if frictional else kinds[:1]:
         ax.plot(t[ks], [count_clusters(test(s)) for s in status], "o-", ms=2.5, lw=1.1,
-                color=("k", STATUS_COLOURS[1], STATUS_COLOURS[2])[n], label=name)
+                color=colour, label=name)
     ax.axvline(t[k], color="0.5", lw=0.8, ls=":")
     ax.tick_params(labelsize=6)
     ax.set_xlabel("time t [s]", fontsize=7)
@@ -256,10 +269,11 @@ def plot_rough(ds, instant=None, *, fig=None):
         grid = fig.add_gridspec(2, 6, height_ratios=(1.5, 1.0))
         maps = [fig.add_subplot(grid[0, j * (6 // nmap):(j + 1) * (6 // nmap)])
                 for j in range(nmap)]
-        counts = _maps(fig, maps, ds, k)
-        _fractions(fig.add_subplot(grid[1, :3]), ds, k, rough_series(ds))
+        frictional = "stick_area" in ds
+        counts = _maps(fig, maps, ds, k, frictional)
+        _fractions(fig.add_subplot(grid[1, :3]), k, rough_series(ds))
         _counts(fig.add_subplot(grid[1, 3:]), ds, k, ks,
-                np.asarray(ds["status"].isel(time=ks).values))
+                np.asarray(ds["status"].isel(time=ks).values), frictional)
         t = float(ds["time"].values[k])
         fig.suptitle(f"{_scene_title(ds)}: {ds.sizes['x1']}x{ds.sizes['x2']} cells, maps "
                      f"at t = {t:.4g} s ({_time_label(ds, k)}); {counts[0]} contact "

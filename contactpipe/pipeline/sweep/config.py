@@ -71,7 +71,7 @@ __all__ = ["SweepFile", "PipelineSpec", "StressSpec", "read_sweep_file", "load_s
            "CONSTANT_FIELDS", "STRESS_CRITERIA", "MAX_AXIS_DEPTH", "MAX_DEPTHS"]
 
 CLOSED_FORM = "closed_form"
-MEMBER_FIGURES = ("profiles", "hysteresis", "radii", "maps", "wear")
+MEMBER_FIGURES = ("profiles", "hysteresis", "radii", "maps", "wear", "rough")
 FIGURES = MEMBER_FIGURES + ("sweep",)
 DEFAULT_FIGURES = ("profiles", "hysteresis", "radii", "sweep")
 #: How deep an axis value may nest (a list of [T1, T2] pairs is 2 deep).
