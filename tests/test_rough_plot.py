@@ -190,3 +190,28 @@ def test_pipeline_draws_the_rough_figure_of_each_member(tmp_path, capsys):
     assert "0 failed" in capsys.readouterr().out
     figs = sorted((tmp_path / "runs" / "figures").glob("*-rough.png"))
     assert len(figs) == 2 and all(imread(f).shape[:2] == (500, 800) for f in figs)
+
+
+def test_rough_figure_refuses_a_bad_value_it_draws(rough_run, tmp_path, capsys):
+    """A NaN written into p at instant 2 of a copy of the run: the figure at instant 2 is
+    refused in one line naming p and step 2 (CLI exit 2, nothing written), while the
+    figure at instant 1, which does not read instant 2 of p, still draws."""
+    import shutil
+
+    import netCDF4
+
+    from contactpipe.exceptions import ArchiveError
+    bad = tmp_path / "bad.nc"
+    shutil.copy(rough_run, bad)
+    with netCDF4.Dataset(bad, "a") as nc:
+        nc["p"][2, 0, 0] = np.nan
+    with pytest.raises(ArchiveError, match=r"p holds NaN or inf at 1 time step\(s\), "
+                                           r"first at step 2"):
+        plot.plot_rough(bad, 2)
+    plot.plot_rough(bad, 1)
+    out = tmp_path / "bad.png"
+    assert cli_main(["plot", str(bad), "-o", str(out), "--kind", "rough",
+                     "--instant", "2"]) == 2
+    assert not out.exists()
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "damaged archive" in err

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 
 import numpy as np
 import xarray as xr
@@ -53,11 +54,13 @@ def _scaled(value, units):
 def _check(ds, path, k, ks) -> None:
     """Refuse ``path`` when a value read for the figure breaks the archive's rules: the
     map fields at instant ``k``, ``status`` at the instants ``ks``, the series."""
-    parts = [ds[[n for n in MAP_FIELDS if n in ds] + [n for n in ("h0", "mu") if n in ds]]
-             .isel(time=[k]),
-             ds[["status"]].isel(time=list(ks)),
-             ds[[n for n in SERIES if n in ds]]]
-    problems = [line for part in parts for line in content_problems(part)]
+    maps = [n for n in MAP_FIELDS if n in ds] + [n for n in ("h0", "mu") if n in ds]
+    parts = [(ds[maps].isel(time=[k]), [k]),
+             (ds[["status"]].isel(time=list(ks)), list(ks)),
+             (ds[[n for n in SERIES if n in ds]], range(ds.sizes["time"]))]
+    # a subset's steps counted from 0: named by their index in the archive
+    problems = [re.sub(r"step (\d+) \(", lambda m, at=at: f"step {at[int(m[1])]} (", line)
+                for part, at in parts for line in content_problems(part)]
     if problems:
         raise ArchiveError(f"{path}: damaged archive: " + "; ".join(dict.fromkeys(problems)))
 
