@@ -172,3 +172,30 @@ def test_a_rough_surface_is_one_period_on_a_periodic_grid(tmp_path):
                                    grid=grid, load=load))
     p, q = ds.p.values[-1], moved.p.values[-1]
     assert np.max(np.abs(np.roll(p, (7, 12), axis=(0, 1)) - q)) <= 1e-6 * p.max()
+
+
+def test_clusters_join_across_a_periodic_grids_edges():
+    """On one period of a surface, a patch cut by the grid's edges is one cluster: a
+    band through the last and first columns, a corner patch in all four corners, and a
+    cell at the top edge with none facing it across. The same map on a free grid counts
+    each piece: 2 + 4 + 1."""
+    s = np.full((10, 12), STATUS_SEPARATED, dtype=np.int8)
+    s[3:6, -1] = STATUS_SLIP
+    s[4:7, 0] = STATUS_SLIP                               # faces the band's rows 4, 5
+    for i, j in ((0, 5), (0, 6), (-1, 5)):                # wraps over the x1 edge only
+        s[i, j] = STATUS_STICK
+    for i, j in ((0, 0), (0, -1), (-1, 0), (-1, -1)):     # the four corners: one patch
+        s[i, j] = STATUS_STICK
+    s[5, 8] = STATUS_STICK                                # inside, alone
+    contact = s != STATUS_SEPARATED
+    assert count_clusters(contact) == 2 + 1 + 4 + 1 + 1
+    assert count_clusters(contact, periodic=True) == 1 + 1 + 1 + 1
+    scene = 'name = "cell"\n[grid]\nboundary = "periodic"\n'
+    ds = xr.Dataset({"status": (("time", "x1", "x2"), s[None])}, coords={"time": [0.0]},
+                    attrs={"scene": scene})
+    counts = contact_clusters(ds)
+    assert int(counts.contact_clusters[0]) == 4
+    assert int(counts.stick_clusters[0]) == 3
+    assert int(counts.slip_clusters[0]) == 1
+    ds.attrs["scene"] = scene.replace("periodic", "free")
+    assert int(contact_clusters(ds).contact_clusters[0]) == 9

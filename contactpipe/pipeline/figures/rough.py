@@ -28,7 +28,7 @@ import xarray as xr
 from ...archive import content_problems, open_archive
 from ...exceptions import ArchiveError
 from ...nomenclature import STATUS_SEPARATED, STATUS_SLIP, STATUS_STICK
-from ...post.clusters import count_clusters
+from ...post.clusters import count_clusters, is_periodic
 from ..inputs import grid_of
 from .canvas import new_figure
 from .common import _index, _scene_title, _time_label, input_kind
@@ -141,7 +141,7 @@ def _image(fig, ax, field, extent, cmap, label, **kw):
     return im, bar
 
 
-def _status_map(fig, ax, status, extent, grid_x, frictional):
+def _status_map(fig, ax, status, extent, grid_x, frictional, periodic=False):
     """The status with contact (grey) and stick (black) clusters outlined; returns the
     counts (contact, stick, slip). Frictionless: separated or in contact only."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
@@ -164,8 +164,8 @@ def _status_map(fig, ax, status, extent, grid_x, frictional):
         if mask.any() and not mask.all():
             ax.contour(grid_x[0] * 1e3, grid_x[1] * 1e3, mask.T.astype(np.float32),
                        levels=[0.5], colors=colour, linewidths=lw).set_rasterized(True)
-    counts = (count_clusters(contact), count_clusters(stick),
-              count_clusters(status == STATUS_SLIP))
+    counts = (count_clusters(contact, periodic), count_clusters(stick, periodic),
+              count_clusters(status == STATUS_SLIP, periodic))
     ax.set_title(f"status: {counts[0]} contact, {counts[1]} stick, {counts[2]} slip "
                  "clusters" if frictional else
                  f"status: {counts[0]} contact clusters (frictionless)", fontsize=8)
@@ -186,7 +186,7 @@ def _maps(fig, axes, ds, k, frictional):
     _image(fig, panels[0], p / f, extent, "viridis", f"p [{unit}]", vmin=0.0)
     panels[0].set_title("pressure p", fontsize=8)
     counts = _status_map(fig, panels[1], np.asarray(ds["status"].isel(time=k).values),
-                         extent, (x1, x2), frictional)
+                         extent, (x1, x2), frictional, is_periodic(ds))
     for ax in axes:
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
@@ -226,8 +226,9 @@ def _counts(ax, ds, k, ks, status, frictional):
     kinds = (("contact", lambda s: s != STATUS_SEPARATED, "k"),
              ("stick", lambda s: s == STATUS_STICK, STATUS_COLOURS[1]),
              ("slip", lambda s: s == STATUS_SLIP, STATUS_COLOURS[2]))
+    periodic = is_periodic(ds)
     for name, test, colour in kinds if frictional else kinds[:1]:
-        ax.plot(t[ks], [count_clusters(test(s)) for s in status], "o-", ms=2.5, lw=1.1,
+        ax.plot(t[ks], [count_clusters(test(s), periodic) for s in status], "o-", ms=2.5, lw=1.1,
                 color=colour, label=name)
     ax.axvline(t[k], color="0.5", lw=0.8, ls=":")
     ax.tick_params(labelsize=6)
