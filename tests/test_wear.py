@@ -313,3 +313,13 @@ def test_maxwell_creep_goes_on_over_the_jumps():
     assert abs(w_jumped / w_every - 1) < 1e-3
     assert w_every - float(every.omega3[0]) > 0.015 * w_every
     assert _identity_error(jumped, 1e-13, "energy") < 1e-6
+
+
+def test_the_progress_bar_counts_cycles_and_shows_the_jump(capsys):
+    """30 cycles at jump 7 (simulated: 1, 2, 9, 16, 23, 30): the bar ends at 30/30 cycles,
+    not at instants, and names the last jump taken."""
+    cp.simulate(scene(cycles=30, jump=7), progress=True)
+    err = capsys.readouterr().err
+    last = err.replace("\r", "\n").strip().splitlines()[-1]
+    assert "30/30" in last and "cycle" in last
+    assert "jump=7" in last
