@@ -7,7 +7,7 @@ The names below load their module on first use (module ``__getattr__``): the rul
 sizes :mod:`.resources` reads."""
 from __future__ import annotations
 
-import importlib
+from .._util.lazy import lazy_names
 
 #: Public names and the modules that define them.
 _LAZY = {
@@ -22,14 +22,4 @@ __all__ = ["Plan", "plan", "pair_couples", "q2_reasons", "RULES", "Rule", "model
            "check_time"]
 
 
-def __getattr__(name):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())

@@ -9,7 +9,7 @@ folder (:func:`open_sweep`, the figures) imports neither the driver nor dask.dis
 the simulation or the FFTs."""
 from __future__ import annotations
 
-import importlib
+from ..._util.lazy import lazy_names
 
 #: Public names and the modules that define them.
 _LAZY = {
@@ -33,14 +33,4 @@ __all__ = ["sweep", "open_sweep", "open_member", "SweepResult", "Member",
            "MANIFEST", "LOCK", "MODES", "SYNCHRONOUS"]
 
 
-def __getattr__(name):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())
