@@ -269,6 +269,7 @@ class RecursiveMemory:
         self._zeta = np.zeros((2, n) + self.shape)       # ζ_i at k−1, k−2
         self._integral = np.zeros((2,) + self.shape)     # I at k−1, k−2
         self._prev = np.zeros(self.shape)                # σ_{k−1}
+        self._parts: tuple | None = None                 # (k, ζ_k, I_k) less σ_k's terms
 
     # -- the scheme ---------------------------------------------------------------------
     def _choose_start(self, sigma0):
@@ -323,21 +324,31 @@ class RecursiveMemory:
             return self.weight0
         return self._weight(self.coefficients(self.k))
 
-    def _advance(self, sigma):
-        """(ζ_k, I_k) from the state and σ_k (σ_k = 0 gives the known parts)."""
-        (a1, a2, b1, b0), (e1, e2, f1, f0) = self.coefficients(self.k)
+    def _known_parts(self):
+        """(ζ_k, I_k) less their σ_k terms: the past's share, kept for the instant k it was
+        formed for, so that :meth:`known` and :meth:`commit` of one instant form it once."""
+        if self._parts is not None and self._parts[0] == self.k:
+            return self._parts[1], self._parts[2]
+        (a1, a2, b1, _), (e1, e2, f1, _) = self.coefficients(self.k)
         ex = (slice(None),) + (None,) * len(self.shape)
-        zeta = (a1[ex] * self._zeta[0] + a2[ex] * self._zeta[1] + b1[ex] * self._prev
-                + b0[ex] * sigma)
-        integral = e1 * self._integral[0] + e2 * self._integral[1] + f1 * self._prev \
-            + f0 * sigma
+        zeta = a1[ex] * self._zeta[0] + a2[ex] * self._zeta[1] + b1[ex] * self._prev
+        integral = e1 * self._integral[0] + e2 * self._integral[1] + f1 * self._prev
+        self._parts = (self.k, zeta, integral)
         return zeta, integral
+
+    def _advance(self, sigma):
+        """(ζ_k, I_k) from the state and σ_k: the past's share plus σ_k's terms, summed in
+        the order A1 y_{k−1} + A2 y_{k−2} + B1 σ_{k−1} + B0 σ_k."""
+        (_, _, _, b0), (_, _, _, f0) = self.coefficients(self.k)
+        ex = (slice(None),) + (None,) * len(self.shape)
+        zeta, integral = self._known_parts()
+        return zeta + b0[ex] * sigma, integral + f0 * sigma
 
     def known(self) -> np.ndarray:
         """H_known for the next instant [Pa] (the part of H not multiplied by σ_k)."""
         if self.k == 0:
             return np.zeros(self.shape)
-        zeta, integral = self._advance(0.0)
+        zeta, integral = self._known_parts()
         return self.b * integral + np.tensordot(self.c, zeta, axes=(0, 0))
 
     def commit(self, sigma: np.ndarray) -> None:
@@ -369,6 +380,7 @@ class RecursiveMemory:
         self._zeta = np.array(state["zeta"], dtype=float)
         self._integral = np.array(state["integral"], dtype=float)
         self._prev = np.array(state["prev"], dtype=float)
+        self._parts = None
 
 
 def error_amplification(creep: ExponentialCreep, dt: float, rule: str, *,
