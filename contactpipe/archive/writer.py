@@ -472,14 +472,17 @@ def _fresh(shape, dtype) -> np.ndarray:
     pages on its large allocations (madvise), and where the kernel compacts memory to
     find them on first touch (``defrag = madvise``, the kernel's default) filling a paper
     fig. 3 run's steps cost several times as long as on plain pages
-    (docs/design-choices.md, D23). The map is private, so a forked process never
-    shares it, and it is unmapped with the last array that uses it.
+    (docs/design-choices.md, D23). Its pages are made when it is mapped
+    (``MAP_POPULATE``, where the system has it), in one call, rather than one fault per
+    page as the steps fill it. The map is private, so a forked process never shares it,
+    and it is unmapped with the last array that uses it.
     """
     dtype = np.dtype(dtype)
     nbytes = int(np.prod(shape)) * dtype.itemsize
     flags = getattr(mmap, "MAP_PRIVATE", 0) | getattr(mmap, "MAP_ANONYMOUS", 0)
     if nbytes < MAPPED_BYTES or not flags:
         return np.empty(shape, dtype)
+    flags |= getattr(mmap, "MAP_POPULATE", 0)
     return np.frombuffer(mmap.mmap(-1, nbytes, flags=flags), dtype=dtype).reshape(shape)
 
 
