@@ -147,8 +147,10 @@ def _history(axes, ds):
     ax_v.plot(n, vol * 1e9, "o-", ms=2.5, lw=1.2, color="C0", label="worn volume")
     ax_v.set_ylabel("worn volume [mm³]", fontsize=8, color="C0")
     ax_e = ax_v.twinx()
-    ax_e.plot(n, np.asarray(ds["cumulative_dissipation"].values, float), "s--", ms=2.5,
-              lw=1.0, color="C3", label="dissipated energy")
+    # hollow markers: under Archard with a uniform mu or the energy law the two curves
+    # coincide (the volume is proportional to the energy), and the volume shows through
+    ax_e.plot(n, np.asarray(ds["cumulative_dissipation"].values, float), "s--", ms=3.5,
+              mfc="none", lw=1.0, color="C3", label="dissipated energy")
     ax_e.set_ylabel("dissipated energy [J]", fontsize=8, color="C3")
     ax_v.set_title("worn volume and dissipated energy", fontsize=9)
     pm = np.asarray(ds["cycle_p_max"].values, float)
