@@ -323,3 +323,18 @@ def test_the_progress_bar_counts_cycles_and_shows_the_jump(capsys):
     last = err.replace("\r", "\n").strip().splitlines()[-1]
     assert "30/30" in last and "cycle" in last
     assert "jump=7" in last
+
+
+def test_a_worn_rough_surface_keeps_its_initial_gap():
+    """A wear run on a generated rough surface (16², 8 steps a cycle, 12 cycles, jump 3)
+    archives ``h0`` like any rough run: the unworn gap the scene generates, not the worn
+    one the run ends with."""
+    rough = {**BASE, "geometry": {"shape": "rough", "hurst": 0.8, "rms_slope": 0.01,
+                                  "wavelengths": [3e-4, 1.2e-4], "seed": 4,
+                                  "form": "sphere", "radius": 0.01}}
+    sc = scene(rough, cycles=12, jump=3)
+    ds = cp.simulate(sc)
+    gap = sc.geometry.gap(ds.x1.values, ds.x2.values)
+    assert "h0" in ds and float(ds.wear_depth[-1].max()) > 0
+    np.testing.assert_array_equal(ds.h0.values, gap)
+    assert validate(ds) == []

@@ -407,7 +407,8 @@ def _dataset(pb, attrs, last, hist) -> xr.Dataset:
     history, as one Dataset."""
     out = pb.scene.output
     names = variables_for(pb.tang)
-    kw = {"maps": {"mu": pb.grid.mu}} if np.ndim(pb.grid.mu) else {}
+    maps = pb.maps()
+    kw = {"maps": maps} if maps else {}
     writer = MemoryWriter(None, pb.grid.x1, pb.grid.x2, names, attrs,
                           precision=out.precision, capacity=len(last), **kw)
     shift = (pb.scene.wear.cycles - 1) * float(pb.t[-1] - pb.t[0])

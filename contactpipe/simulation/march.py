@@ -342,9 +342,7 @@ def _start(pb, path, attrs, ckpt):
     out = pb.scene.output
     names = variables_for(pb.tang)
     kw = {"precision": out.precision, "compress": out.compress}
-    maps = {"mu": pb.grid.mu} if np.ndim(pb.grid.mu) else {}
-    if pb.scene.geometry.shape in ("surface", "rough"):
-        maps["h0"] = pb.grid.gap             # the initial gap the run starts from
+    maps = pb.maps()
     if maps:
         kw["maps"] = maps
     st = State.initial(pb.grid.shape, pb.ops.new_memories())

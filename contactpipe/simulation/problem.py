@@ -185,6 +185,15 @@ class Problem:
         self.wear = None if getattr(scene, "wear", None) is None else \
             WearTracker(scene.wear, self.grid.gap)
 
+    def maps(self) -> dict:
+        """The archive's maps over (x1, x2): a mapped friction ``mu``, and for a measured or
+        generated surface the initial gap ``h0`` the run starts from (unworn in a wear
+        run, whose gap opens as it goes)."""
+        maps = {"mu": self.grid.mu} if np.ndim(self.grid.mu) else {}
+        if self.scene.geometry.shape in ("surface", "rough"):
+            maps["h0"] = self.grid.gap if self.wear is None else self.wear.hi
+        return maps
+
     def _check_finite(self):
         """Refuse constants whose influence coefficients float64 cannot hold, or whose
         pressures and displacements it cannot square (the solvers' inner products)."""
