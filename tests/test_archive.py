@@ -267,6 +267,52 @@ def test_abort_keeps_a_previous_archive(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["run.nc"]
 
 
+def test_a_step_is_written_as_appended_though_the_caller_reuses_its_arrays(tmp_path):
+    """The writer's thread writes an instant after ``append`` returned: it must write the
+    values given, not what the caller's arrays hold by then. The thread is held back (the
+    netCDF lock taken here) until the caller has overwritten every array it passed."""
+    from contactpipe.archive.background import NETCDF_LOCK
+    target = tmp_path / "run.nc"
+    steps = synthetic_steps()
+    with ArchiveWriter(target, X1, X2, NAMES, ATTRS) as w:
+        for t, values in steps:
+            reused = {k: (v.copy() if isinstance(v, np.ndarray) else v)
+                      for k, v in values.items()}
+            with NETCDF_LOCK:
+                w.append(t, reused)
+                for v in reused.values():
+                    if isinstance(v, np.ndarray):
+                        v[...] = 7                   # the caller's next instant
+            w.flush()                                # the thread writes it now
+        w.close(WALL)
+    with open_archive(target) as ds:
+        for k, (_, values) in enumerate(steps):
+            for name in ("p", "q1", "s1", "status"):
+                np.testing.assert_array_equal(ds[name].isel(time=k).values, values[name])
+
+
+def test_a_failed_write_on_the_thread_is_raised_and_nothing_published(tmp_path, monkeypatch):
+    """Fault injection: the writer's thread fails at step 2 (a full disk, say). A later
+    call raises it as an ArchiveError naming the archive and the step, and nothing is
+    published."""
+    import contactpipe.archive.writer as writer
+    real = writer._write_instant
+
+    def failing(nc, k, t, arrays):
+        if k == 2:
+            raise OSError("No space left on device")
+        return real(nc, k, t, arrays)
+
+    monkeypatch.setattr(writer, "_write_instant", failing)
+    target = tmp_path / "run.nc"
+    with pytest.raises(ArchiveError, match=r"run\.nc: writing step 2 failed .*No space left"):
+        with ArchiveWriter(target, X1, X2, NAMES, ATTRS) as w:
+            for t, values in synthetic_steps():
+                w.append(t, values)
+            w.close(WALL)
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="needs SIGKILL")
 def test_killed_writer_leaves_no_archive(tmp_path):
     target = tmp_path / "killed.nc"

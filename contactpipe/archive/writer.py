@@ -34,6 +34,7 @@ from .._util.files import publish, temp_name
 from .._util.interrupts import raise_if_signalled
 from ..exceptions import ArchiveError, one_line
 from ..nomenclature import FIELD, HISTORY, MAP, MAPS, VARIABLES, cf_attrs
+from .background import NETCDF_LOCK, Background
 from .content import content_problems
 from .schema import (
     COMPLEVEL,
@@ -193,8 +194,11 @@ class _StepWriter:
         return False
 
 
-def _discard(nc, tmp: pathlib.Path) -> None:
-    """Close the netCDF handle and remove the temporary file (abort and garbage collection)."""
+def _discard(nc, tmp: pathlib.Path, background: Background | None = None) -> None:
+    """Close the netCDF handle and remove the temporary file (abort and garbage
+    collection), once the writer thread has finished the write it was doing."""
+    if background is not None:
+        background.stop()
     try:
         if nc.isopen():
             nc.close()
@@ -289,7 +293,9 @@ class ArchiveWriter(_StepWriter):
 
     Notes
     -----
-    The writer keeps nothing per step in memory: each ``append`` goes to disk. A step
+    The writer keeps at most two instants in memory: each ``append`` is handed to the
+    writer's thread, which compresses and writes it while the caller computes the next
+    (:mod:`.background`); ``flush`` and ``close`` wait for it. A step
     holding NaN or inf is refused whole (``ArchiveError`` naming variable and step) and the
     writer stays usable. ``close`` adds the final attributes (``wall_time_s`` defaults to
     the seconds since the writer was created), reads the file back and refuses to publish
@@ -316,7 +322,8 @@ class ArchiveWriter(_StepWriter):
             raise ArchiveError(f"{self.path}: cannot create the temporary file "
                                f"{self._tmp.name} ({one_line(e)})") from e
         self._nc = nc
-        self._finalizer = weakref.finalize(self, _discard, nc, self._tmp)
+        self._background = Background(str(self.path))
+        self._finalizer = weakref.finalize(self, _discard, nc, self._tmp, self._background)
         try:
             self._define()
         except BaseException as e:
@@ -352,18 +359,23 @@ class ArchiveWriter(_StepWriter):
         self._nc = nc
         self.steps = steps
         self._done = False
-        self._finalizer = weakref.finalize(self, _discard, nc, self._tmp)
+        self._background = Background(str(self.path))
+        self._finalizer = weakref.finalize(self, _discard, nc, self._tmp, self._background)
 
     def flush(self) -> None:
-        """Push what was appended to disk (before a checkpoint); nothing once closed."""
+        """Push what was appended to disk (before a checkpoint): wait for the writer
+        thread, then sync; nothing once closed. Raises a failed write."""
         if self._nc.isopen():
-            self._nc.sync()
+            self._background.drain()
+            with NETCDF_LOCK:
+                self._nc.sync()
 
     def suspend(self) -> None:
         """Close the part file and keep it for a later resume (resumable writers only)."""
         if not self.resumable:
             return self.abort()
         self._finalizer.detach()
+        self._background.stop()        # the part file keeps what was written (checkpointed)
         try:
             self._nc.close()
         except Exception:                  # noqa: BLE001 - already broken: nothing to keep
@@ -405,15 +417,17 @@ class ArchiveWriter(_StepWriter):
         nc.setncatts(self.attrs)
 
     def append(self, t: float, values: dict) -> None:
-        """Write one instant: time ``t`` [s] and a value for every declared variable."""
+        """Write one instant: time ``t`` [s] and a value for every declared variable.
+
+        The values are checked here (a refused instant raises, nothing of it kept) and
+        written by the writer's thread (:mod:`.background`) while the caller goes on;
+        the arrays are copied where they are the caller's own. A failed write is raised
+        by a later ``append``, ``flush`` or ``close``."""
         t, arrays = self._check_step(t, values)
-        k = self.steps
-        try:
-            self._nc["time"][k] = t
-            for name, arr in arrays.items():
-                self._nc[name][k] = arr
-        except Exception as e:             # noqa: BLE001 - reported with the path
-            raise ArchiveError(f"{self.path}: writing step {k} failed ({one_line(e)})") from e
+        owned = {name: (arr.copy() if isinstance(values[name], np.ndarray)
+                        and np.may_share_memory(arr, values[name]) else arr)
+                 for name, arr in arrays.items()}
+        self._background.submit(self.steps, _write_instant, self._nc, self.steps, t, owned)
         self._commit(t)
 
     def close(self, attrs: dict | None = None) -> pathlib.Path:
@@ -426,6 +440,8 @@ class ArchiveWriter(_StepWriter):
             raise ArchiveError(f"{self.path}: writer already closed or aborted")
         raise_if_signalled()
         try:
+            self._background.drain()
+            self._background.stop()
             final = self._final_attrs(attrs)
             final["complete"] = "true"
             self._nc.setncatts(final)
@@ -458,6 +474,13 @@ class ArchiveWriter(_StepWriter):
         if finalizer is not None:
             finalizer()
         self._done = True
+
+
+def _write_instant(nc, k: int, t: float, arrays: dict) -> None:
+    """Instant ``k`` into the open file ``nc`` (on the writer's thread)."""
+    nc["time"][k] = t
+    for name, arr in arrays.items():
+        nc[name][k] = arr
 
 
 #: Arrays of a MemoryWriter at least this large [bytes] are kept on their own anonymous
