@@ -433,6 +433,21 @@ def test_the_reading_stages_import_neither_the_solver_nor_a_cluster():
         "\n".join(out) + err[-2000:]
 
 
+def test_the_simulation_imports_no_dask_arrays():
+    """``import contactpipe.simulation`` loads pyfftw but not dask or dask.array (pyfftw's
+    dask interface imported them: 0.28-0.45 s of 1.00 s, now 0.77 s, 2 cores). The entry
+    that kept pyfftw from dask is gone again: dask.array.fft imports afterwards, and
+    pyfftw's own interfaces are there."""
+    out, err = _in_a_fresh_process(
+        "import sys\nimport contactpipe.simulation\n"
+        "print('pyfftw' in sys.modules, 'dask.array.fft' in sys.modules,\n"
+        "      sorted(set(sys.modules) & {'dask', 'dask.array'}))\n"
+        "import dask.array.fft, pyfftw\n"
+        "print(dask.array.fft.fft_wrap.__name__, pyfftw.interfaces.numpy_fft.__name__)\n")
+    assert out[:2] == ["True False []", "fft_wrap pyfftw.interfaces.numpy_fft"], \
+        "\n".join(out) + err[-2000:]
+
+
 def test_public_names_load_on_first_use():
     """Every name of contactpipe.__all__ resolves; cp.fatigue stays the function when
     the module of that name is imported."""

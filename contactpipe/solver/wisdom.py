@@ -32,7 +32,7 @@ import platform
 import re
 from pathlib import Path
 
-import pyfftw
+import pyfftw  # loaded by .convolution first, without its dask interface
 
 from .._util.files import atomic_path
 
