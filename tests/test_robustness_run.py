@@ -333,11 +333,12 @@ def test_the_estimate_bounds_a_measured_peak(tmp_path):
     peaks below its estimate (measured 54.5 MiB against 65.1 MiB estimated, the windows
     of the contact included). The peak is
     the resident high-water mark (VmHWM) after resetting it (/proc/self/clear_refs), so
-    the imports' own peak does not count (nor that of dask.array, which xarray imports
-    to open the archive)."""
+    the imports' own peak does not count (nor that of dask.array and scipy.ndimage,
+    which the run imports where it uses them: xarray to open the archive, the preload's
+    self-similar start)."""
     code = ("import re, contactpipe as cp\n"
             "import contactpipe.simulation  # import contactpipe is lazy: load it first\n"
-            "import dask.array  # xarray imports it to open the archive: an import too\n"
+            "import dask.array, scipy.ndimage  # the run imports them where used: imports\n"
             "from contactpipe.testing import TINY_SCENES\n"
             "from contactpipe.planning import estimate_resources\n"
             "sc = cp.Scene.from_toml_text(TINY_SCENES['fretting']).replace("

@@ -54,7 +54,6 @@ from functools import lru_cache
 
 import numpy as np
 import scipy.fft
-from scipy.interpolate import RectBivariateSpline
 
 from .influence import KEYS
 
@@ -119,6 +118,10 @@ def alias_sum(theta1, theta2, d1, d2, outer, skip_zero=False, half_shell=True):
 def _remainder_table(ratio):
     """Splines of R(θ) (the aliases a ≠ 0) of each basis for cells of sides 1 x ``ratio``
     [m] over θ1, θ2 in [0, π]: {basis: spline}."""
+    # here, not at the top: scipy.interpolate pulls scipy.optimize, .linalg, .sparse and
+    # .spatial (0.13-0.17 s) into every run, and only a periodic grid needs it
+    from scipy.interpolate import RectBivariateSpline
+
     t1 = np.linspace(0.0, np.pi, NODES[0])
     t2 = np.linspace(0.0, np.pi, NODES[1])
     coarse = alias_sum(t1, t2, 1.0, ratio, ALIASES, skip_zero=True)

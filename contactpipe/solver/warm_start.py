@@ -27,7 +27,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy import ndimage
 
 from .options import TUNING
 
@@ -37,6 +36,8 @@ __all__ = ["continued_start", "self_similar_start"]
 def _stretch(f, lam, centre):
     """f (N1, N2) stretched by ``lam`` about ``centre`` (in cell indices), bilinear, zero
     outside the grid."""
+    from scipy import ndimage  # here: only a self-similar preload needs it (0.03 s)
+
     i, j = np.meshgrid(np.arange(f.shape[0], dtype=float), np.arange(f.shape[1], dtype=float),
                        indexing="ij")
     return ndimage.map_coordinates(f, [centre[0] + (i - centre[0]) / lam,
