@@ -199,19 +199,20 @@ def test_a_checkpoint_without_the_increments_resumes(tmp_path):
 
 # --------------------------------------------------------------------------- the command line
 
-#: `contactpipe run` whose simulate sends itself SIGTERM right after instant STOP_AT (the
-#: checkpoint cadence stays the default 30 s: none falls due in so short a run).
+#: `contactpipe run` whose run_scene (simulate, the archive not reopened) sends itself
+#: SIGTERM right after instant STOP_AT (the checkpoint cadence stays the default 30 s:
+#: none falls due in so short a run).
 SIGNALLING_RUNNER = textwrap.dedent("""
     import os, signal, sys
     import contactpipe.pipeline.cli as cli
-    import contactpipe.simulation as sim      # the CLI imports simulate from it per run
-    real, stop = sim.simulate, int(os.environ["STOP_AT"])
-    def simulate(*args, **kwargs):
+    import contactpipe.simulation as sim      # the CLI imports run_scene from it per run
+    real, stop = sim.run_scene, int(os.environ["STOP_AT"])
+    def run_scene(*args, **kwargs):
         def on_step(k, t, record):
             if k == stop:
                 os.kill(os.getpid(), signal.SIGTERM)
         return real(*args, on_step=on_step, **kwargs)
-    sim.simulate = simulate
+    sim.run_scene = run_scene
     sys.exit(cli.main(sys.argv[1:]))
 """)
 

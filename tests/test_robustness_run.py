@@ -249,7 +249,7 @@ def test_terminated_resumable_run_keeps_its_state(tmp_path):
     runner = ("import sys, contactpipe as cp\n"
               "from contactpipe.pipeline.cli import main\n"
               "import contactpipe.simulation.march as s\n"
-              "s.simulate.__kwdefaults__['checkpoint_seconds'] = 0.0\n"
+              "s.run_scene.__kwdefaults__['checkpoint_seconds'] = 0.0\n"
               "sys.exit(main(sys.argv[1:]))\n")
     proc = subprocess.Popen([sys.executable, "-c", runner, "run", str(scene), "-o",
                              str(target), "--resume", "--no-progress"],

@@ -9,9 +9,11 @@ from .march import (
                     State,
                     grid_coordinates,
                     raise_if_signalled,
+                    run_scene,
                     signals_as_interrupt,
                     simulate,
 )
 
-__all__ = ["simulate", "grid_coordinates", "State", "ResumeLockedError", "ResumeWarning",
-           "ResumeNotice", "Interrupted", "signals_as_interrupt", "raise_if_signalled"]
+__all__ = ["simulate", "run_scene", "grid_coordinates", "State", "ResumeLockedError",
+           "ResumeWarning", "ResumeNotice", "Interrupted", "signals_as_interrupt",
+           "raise_if_signalled"]

@@ -530,6 +530,19 @@ def simulate(scene, path=None, *, progress=False, tangential=None, coupling=None
     for them: at the end of the instant in progress (a second signal: at once), or just
     before the archive's rename, when nothing is published.
     """
+    out = run_scene(scene, path, progress=progress, tangential=tangential, coupling=coupling,
+                    tuning=tuning, fft=fft, threads=threads, on_step=on_step, resume=resume,
+                    checkpoint_seconds=checkpoint_seconds)
+    return out if path is None else open_archive(out)
+
+
+def run_scene(scene, path=None, *, progress=False, tangential=None, coupling=None,
+              tuning=None, fft=None, threads=None, on_step=None, resume=False,
+              checkpoint_seconds=30.0):
+    """:func:`simulate`, returning the archive's path (with ``path``) rather than the
+    archive opened: for a caller that needs the file, not the data (the command line).
+    Opening it lazily imports dask's arrays (0.23 s of a 2.06 s ``contactpipe run``).
+    Without ``path``: the Dataset assembled in memory, as :func:`simulate` returns it."""
     wall0 = _time.perf_counter()
     if path is not None:
         path = check_output_path(path, "archive", inputs=_inputs(scene))
@@ -556,7 +569,8 @@ def _go(pb, path, ckpt, opts):
 
 
 def _run(pb, path, resume, opts):
-    """March ``pb`` in memory (``path`` None), into a new archive, or resumably."""
+    """March ``pb`` in memory (``path`` None: the Dataset), into a new archive, or
+    resumably (the archive's path)."""
     if path is None:
         return _go(pb, None, None, opts)
     try:
@@ -565,7 +579,7 @@ def _run(pb, path, resume, opts):
         raise OutputPathError(f"archive {path}: cannot create its folder "
                               f"({e.strerror or one_line(e)})") from None
     if not resume:
-        return open_archive(_go(pb, path, None, opts))
+        return _go(pb, path, None, opts)
     lock = resume_lock(path)
     with exclusive_lock(lock, f"resumable run of {path.name}", error=ResumeLockedError):
         ckpt = Checkpoint(path, pb.scene.digest())
@@ -574,5 +588,5 @@ def _run(pb, path, resume, opts):
             result = _go(pb, path, ckpt, opts)
         finally:
             lock.unlink(missing_ok=True)
-    return open_archive(result)
+    return result
 
