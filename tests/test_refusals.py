@@ -498,6 +498,24 @@ def test_a_run_prints_its_summary_without_dask_arrays(tmp_path, capsys):
     assert figure.stat().st_size > 10_000
 
 
+def test_a_sweep_member_is_simulated_without_dask_arrays(tmp_path):
+    """A sweep's member is simulated into its file and not opened again: opened lazily, it
+    imported dask.array (0.23 s) into each worker. An 8 x 8 tiny fretting member
+    (5 instants) simulated in a fresh process by the sweep's runner leaves a complete
+    archive of 6 instants without dask.array loaded."""
+    scene = tmp_path / "tiny.toml"
+    scene.write_text(tiny_scene("fretting", **{"grid.points": [8, 8], "time.steps": 5})
+                     .to_toml())
+    out, err = _in_a_fresh_process(
+        "import sys\nfrom contactpipe.pipeline.sweep import execute\n"
+        "from contactpipe.scene import Scene\n"
+        f"print(execute._simulate(Scene.from_toml({str(scene)!r}), "
+        f"{str(tmp_path / 'm.nc')!r}), 'dask.array' in sys.modules)\n")
+    assert out[0] == "None False", "\n".join(out) + err[-2000:]
+    with cp.open_archive(tmp_path / "m.nc", verify=True) as ds:
+        assert ds.sizes["time"] == 6
+
+
 def test_public_names_load_on_first_use():
     """Every name of contactpipe.__all__ resolves; cp.fatigue stays the function when
     the module of that name is imported."""
