@@ -183,7 +183,9 @@ def _cells(case, q):
         return (_fmt(q["iterations_per_step"]),
                 f"{_fmt(q['pairs_per_step'])} a step after the first instant; "
                 f"{_fmt(q['run_pairs'])} in all", first,
-                f"{_fmt(q['run_s'])} s", f"{_fmt(q['pair_ms'])} ms", _run_over_floor(q))
+                f"{_fmt(q['run_s'])} s" + (f"; into an archive {_fmt(q['file_run_s'])} s"
+                                           if q.get("file_run_s") else ""),
+                f"{_fmt(q['pair_ms'])} ms", _run_over_floor(q))
     if case == "fig3-study":
         return ("", f"{_fmt(q['run_pairs'])} in all", "", f"{_fmt(q['run_s'])} s",
                 f"{_fmt(q['pair_ms'])} ms", _run_over_floor(q))
