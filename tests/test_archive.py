@@ -291,6 +291,14 @@ def test_a_step_is_written_as_appended_though_the_caller_reuses_its_arrays(tmp_p
                 np.testing.assert_array_equal(ds[name].isel(time=k).values, values[name])
 
 
+def test_the_memory_estimate_counts_the_instants_the_writer_holds():
+    """The planning's memory estimate counts a streamed archive's writer at its most: the
+    two instants its thread's queue keeps and the one being handed over."""
+    from contactpipe.archive.background import DEPTH
+    from contactpipe.planning.resources import WRITER_INSTANTS
+    assert WRITER_INSTANTS == DEPTH + 1
+
+
 def test_a_failed_write_on_the_thread_is_raised_and_nothing_published(tmp_path, monkeypatch):
     """Fault injection: the writer's thread fails at step 2 (a full disk, say). A later
     call raises it as an ArchiveError naming the archive and the step, and nothing is

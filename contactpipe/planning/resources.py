@@ -43,7 +43,9 @@ __all__ = ["Resources", "estimate_resources", "available_memory", "check_resourc
 #                      of temporaries, or (steps + 2) 3N floats (direct sum of increments)
 #   per-step arrays    WORKING[tangential] N floats: the state (p, q, u, s), the solvers'
 #                      vectors and the record of the instant
-#   output             streamed: one chunk per variable and the read-back check's block;
+#   output             streamed: the instants the archive's writer thread holds (its
+#                      queue's two and the one being handed over) and the read-back
+#                      check's block;
 #                      in memory: every instant kept, then stacked (twice)
 #   surface            a rough or measured surface: its initial gap h0, a map the archive
 #                      keeps (N floats, twice in memory); while the gap is made, before
@@ -267,9 +269,15 @@ def _step_share(scene, n1, n2) -> float:
     return share if np.isfinite(share) and 0.0 < share <= LARGEST_SHARE else 1.0
 
 
+#: Instants a streamed archive's writer holds at most: the two its thread's queue keeps
+#: (:data:`contactpipe.archive.background.DEPTH`) and the one being handed over.
+WRITER_INSTANTS = 3
+
+
 def _output_bytes(scene, tangential, instants, n, in_memory) -> int:
     """Bytes of the output: the instants kept in memory (twice: kept, then stacked), or
-    one chunk per variable and the read-back check's blocks of a streamed archive."""
+    the instants the writer's thread holds and the read-back check's blocks of a
+    streamed archive."""
     names = variables_for(tangential)
     fields = [v for v in names if VARIABLES[v]["dims"] == FIELD]
     size = np.dtype(scene.output.precision).itemsize
@@ -279,7 +287,7 @@ def _output_bytes(scene, tangential, instants, n, in_memory) -> int:
     check = 2 * min(CHECK_BYTES, kept * 4 * 8 * n)       # blocks and temporaries
     if in_memory:
         return 2 * kept * per_instant + check
-    return per_instant + check
+    return WRITER_INSTANTS * per_instant + check
 
 
 def _surface_bytes(scene, n, in_memory) -> tuple[int, int]:
