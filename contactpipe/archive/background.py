@@ -1,16 +1,18 @@
 """The instants of a streamed archive written on a thread of their own.
 
 Compressing and writing an instant's fields (zlib with shuffle, a fletcher32 checksum
-per chunk) is most of what a file run spends outside the solver: 3.5 of 8.3 s for the
-paper's figure-3 run at 128², 200 steps, on one thread. netCDF4 releases the GIL while
-the HDF5 library compresses and writes, so a second core can do it while the solver
-computes the next instant (docs/design-choices.md, D37).
+per chunk) is most of what a file run spends outside the solver: about 3.5 of 8.0 s for
+the paper's figure-3 run at 128², 200 steps, on one thread. netCDF4 releases the GIL
+while the HDF5 library compresses and writes, so a second core can do it while the
+solver computes the next instant (docs/design-choices.md, D36).
 
 :class:`Background` keeps one worker thread and at most ``depth`` instants waiting
-for it, so memory stays flat (an ``append`` waits while ``depth`` are queued). Every
-netCDF call of the writers runs under one process-wide lock, xarray's HDF5 lock where
-xarray has one: the HDF5 library is not safe for concurrent calls, and a process may
-read or write other files on other threads (a dask worker with several threads). A write
+for it, so memory stays flat (an ``append`` waits while ``depth`` are queued: with the
+instant being handed over, ``depth`` + 1 are held at most). The thread's writes run
+under one process-wide lock, xarray's HDF5 lock where xarray has one: the HDF5 library
+is not safe for concurrent calls, and a process may read or write other files on other
+threads (a dask worker with several threads); the writer's own calls on its caller's
+thread come only once the queue is drained. A write
 that fails is raised by the next call that waits on the queue, naming the instant.
 """
 from __future__ import annotations

@@ -293,7 +293,8 @@ class ArchiveWriter(_StepWriter):
 
     Notes
     -----
-    The writer keeps at most two instants in memory: each ``append`` is handed to the
+    The writer keeps at most three instants in memory (two queued and the one being
+    handed over: :data:`.background.DEPTH`): each ``append`` is handed to the
     writer's thread, which compresses and writes it while the caller computes the next
     (:mod:`.background`); ``flush`` and ``close`` wait for it. A step
     holding NaN or inf is refused whole (``ArchiveError`` naming variable and step) and the
