@@ -73,14 +73,14 @@ def fig3_study(n, steps):
         scene = c.maxwell_fretting_scene(n=n, steps=steps, window=ratio * c.RELAXATION_TIME,
                                          name=f"fig3-maxwell-tau{ratio:g}",
                                          preload=study.PRELOAD[0])
-        floor = bench._floor_ms(n, "auto", 1)[0]
+        floor = bench.floor_ms(n, "auto", 1)[0]
         with tempfile.TemporaryDirectory() as tmp:
             t0 = time.perf_counter()
             with simulate(scene, pathlib.Path(tmp) / "fig3.nc") as ds:
                 wall = time.perf_counter() - t0
                 pairs = int(ds.fft_pairs.values.sum()
                             + ds.attrs.get("preload_estimate_fft_pairs", 0))
-        floor = min(floor, bench._floor_ms(n, "auto", 1)[0])
+        floor = min(floor, bench.floor_ms(n, "auto", 1)[0])
         print(f"  tau = {ratio:g} t': {wall:.1f} s ({pairs:,} FFT pairs, one pair {floor:.3f} "
               f"ms, wall / floor {wall * 1e3 / (pairs * floor):.1f})")
         rows.append(dict(case="fig3-study", pair="rigid/Maxwell", form=f"tau={ratio:g}t'",

@@ -35,6 +35,10 @@ long-run    256², 2000 steps streamed to disk: peak resident memory
 wear        10⁵ cycles of partial-slip fretting with Archard wear, 48², 20 steps a cycle,
             jump auto, end to end; and jump auto against every cycle simulated over a
             shorter life (:mod:`contactpipe.pipeline.cli.bench_wear`)
+phases      where a step's time goes: the spectral work (transforms, filters, kernel
+            products, Parseval inners) timed in situ against the floor, and the rest, for
+            fretting steel/Al scalar 128² and 256², vector 128², steel/steel vector 128² and
+            paper-fig3 (:mod:`contactpipe.pipeline.cli.bench_phases`)
 
 ``--tuning NAME=VALUE ...`` runs ``fretting`` and ``paper-fig3`` with solver switches
 or constants changed from their defaults (:class:`contactpipe.solver.options.Tuning`,
@@ -43,11 +47,12 @@ columns of two runs show what a feature saves.
 
 The table
 ---------
-``normal``, ``fretting``, ``paper-fig3`` and ``wear`` write their rows to
+``normal``, ``fretting``, ``paper-fig3``, ``wear`` and ``phases`` write their rows to
 ``benchmarks/results/bench-<case>.csv`` (beside the package in a source checkout, else
 under the current folder), or all to ``--csv PATH``, atomically (a reader never sees half a
-file), with the columns of :data:`COLUMNS` (``wear``: its own,
-:data:`~contactpipe.pipeline.cli.bench_wear.WEAR_COLUMNS`): the date (UTC), the commit, the
+file), with the columns of :data:`COLUMNS` (``wear`` and ``phases``: their own,
+:data:`~contactpipe.pipeline.cli.bench_wear.WEAR_COLUMNS` and
+:data:`~contactpipe.pipeline.cli.bench_phases.PHASE_COLUMNS`): the date (UTC), the commit, the
 CPUs and the one-minute load average during the row's run say on what it was measured. ``--quick``
 (16², 5 steps: seconds) writes no file unless ``--csv`` is given, so the checked-in tables
 keep full figures. ``memory`` and ``long-run`` only print.
@@ -74,16 +79,25 @@ import numpy as np
 
 from ..._util.files import check_output_path, write_text
 from ...exceptions import SceneError
-from ...scene import Scene
+from .bench_phases import PHASE_COLUMNS, QUICK_PHASES, bench_phases
+from .bench_scenes import (
+    A_HERTZ,
+    ALUMINIUM,
+    E_STEEL,
+    STEEL,
+    W,
+    floor_ms,
+    fretting_scene,
+    load_average,
+    make_scene,
+    paper_fig3_scene,
+    timed_run,
+)
 from .bench_wear import QUICK_WEAR, WEAR_COLUMNS, bench_wear
 
 __all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
-           "table_rows", "write_table", "default_table_path"]
-
-E_STEEL, NU, R, W, MU = 210e9, 0.3, 0.018, 1000.0, 0.1
-A_HERTZ = (3 * W * R / (4 / (2 * (1 - NU ** 2) / E_STEEL))) ** (1 / 3)
-STEEL = {"material": "elastic", "young": E_STEEL, "poisson": NU}
-ALUMINIUM = {"material": "elastic", "young": 70e9, "poisson": 0.33}
+           "table_rows", "write_table", "default_table_path", "fretting_scene",
+           "paper_fig3_scene", "floor_ms"]
 
 #: The columns of the CSV table, in order: what was run (case, the bodies, grid N for
 #: N x N cells, steps after the first instant, solver tolerance, tangential form), the
@@ -96,69 +110,12 @@ COLUMNS = ("case", "pair", "grid", "steps", "tolerance", "form", "pairs_per_step
            "first_instant_pairs", "preload_estimate_pairs", "run_pairs", "run_s",
            "file_run_s", "date", "commit", "cpus", "load_average")
 #: The cases that write the table (the others only print).
-TABLE_CASES = ("normal", "fretting", "paper-fig3", "wear")
+TABLE_CASES = ("normal", "fretting", "paper-fig3", "wear", "phases")
+#: The table cases with columns of their own (a table holds one kind of row).
+OWN_COLUMNS = {"wear": WEAR_COLUMNS, "phases": PHASE_COLUMNS}
 #: ``--quick``: a smoke run of seconds.
 QUICK = dict(grids=[16], steps=5, memory=(16, 25), long_run=(16, 20))
 _ROOT = pathlib.Path(__file__).resolve().parents[2]
-
-
-def _scene(**kw):
-    d = {"name": "bench", "geometry": {"shape": "sphere", "radius": R},
-         "indenter": dict(STEEL), "halfspace": dict(STEEL)}
-    d.update(kw)
-    return Scene(**d)
-
-
-def _floor_ms(n, backend, threads, blocks=3):
-    """(milliseconds of one FFT pair of the padded n x n grid, plan time [s]).
-
-    One pair as the solver's engine spends it (:meth:`Convolver.convolve`: forward
-    transform, product with a kernel spectrum, inverse transform), on an engine made as the
-    solver makes its own (same backend, threads and planner; with FFTW's wisdom, the same
-    plans); the least of ``blocks`` timed blocks, so that a busy moment does not count.
-    """
-    from ...solver.convolution import Convolver  # pyfftw: only when a case runs
-    conv = Convolver(n, n, backend=backend, threads=threads)
-    k = conv.kernel_spectrum(np.ones((2 * n, 2 * n)))
-    x = np.random.default_rng(0).normal(size=(n, n))
-    reps = max(5, min(2000, int(2e6 / (n * n))))
-    conv.convolve(k, x)
-    best = math.inf
-    for _ in range(blocks):
-        t0 = time.perf_counter()
-        for _ in range(reps):
-            conv.convolve(k, x)
-        best = min(best, (time.perf_counter() - t0) / reps)
-    return best * 1e3, conv.plan_time_s
-
-
-def _load() -> float:
-    return os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
-
-
-def timed_run(scene, form=None, tuning=None):
-    """Run ``scene`` in memory: (dataset, the run's wall time [s], the wall time of a step
-    after the first instant [ms], the one-minute load average, the higher of before and
-    after).
-
-    A step's time is that from the end of the first instant to the end of the last step,
-    over the steps between: the setup (FFT plans, kernel spectra) and the first instant
-    (its frictional preload, its error estimate) are left out, as the per-step pairs
-    leave them out. NaN for a run of one instant. ``tuning``: the solver core's switches
-    (:class:`contactpipe.solver.options.Tuning`; None: the defaults).
-    """
-    from ...simulation import simulate  # the solver and the FFTs: only when a case runs
-    stamps = []
-    load = _load()
-    kw = {} if form is None else {"tangential": form}
-    if tuning is not None:
-        kw["tuning"] = tuning
-    t0 = time.perf_counter()
-    ds = simulate(scene, on_step=lambda k, t, rec: stamps.append(time.perf_counter()), **kw)
-    run_s = time.perf_counter() - t0
-    steps = len(stamps) - 1
-    ms = (stamps[-1] - stamps[0]) / steps * 1e3 if steps > 0 else math.nan
-    return ds, run_s, ms, max(load, _load())
 
 
 def _figures(pairs_per_step, ms_per_step, pair_ms):
@@ -195,24 +152,24 @@ def bench_normal(grids, backend, threads):
           "1e-10; one instant, solved a second time (setup left out)")
     print(f"{'grid':>9} {'iter':>5} {_HEAD} {'setup s':>7}")
     for n in grids:
-        sc = _scene(load={"time": [0.0], "normal_force": W},
-                    grid={"points": [n, n], "size": [4 * A_HERTZ] * 2},
-                    solver={"tolerance": 1e-10, "fft": backend, "threads": threads})
-        load = _load()
+        sc = make_scene(load={"time": [0.0], "normal_force": W},
+                        grid={"points": [n, n], "size": [4 * A_HERTZ] * 2},
+                        solver={"tolerance": 1e-10, "fft": backend, "threads": threads})
+        load = load_average()
         t0 = time.perf_counter()
         simulate(sc)                                  # plans and kernel spectra (cached)
         first = time.perf_counter() - t0
-        pair = _floor_ms(n, backend, threads)[0]
+        pair = floor_ms(n, backend, threads)[0]
         t0 = time.perf_counter()
         ds = simulate(sc)
         wall = (time.perf_counter() - t0) * 1e3
-        pair = min(pair, _floor_ms(n, backend, threads)[0])
+        pair = min(pair, floor_ms(n, backend, threads)[0])
         pairs = float(ds.fft_pairs.values[0])
         r = dict(case="normal", pair="steel/steel", form="normal", grid=n, steps=0,
                  tolerance=1e-10, iterations_per_step=int(ds.iterations[0]),
                  **_figures(pairs, wall, pair), first_instant_pairs=int(pairs),
                  preload_estimate_pairs=0, run_pairs=pairs, run_s=first,
-                 load_average=max(load, _load()))
+                 load_average=max(load, load_average()))
         print(f"{n:>4}x{n:<4} {r['iterations_per_step']:>5} {_cells(r)} "
               f"{first - wall / 1e3:>7.2f}")
         rows.append(r)
@@ -225,21 +182,15 @@ def bench_fretting(grids, backend, threads, steps=40, tuning=None):
           "tol 1e-9; per step after the first instant (warm-started; setup left out)")
     print(f"{'pair':>16} {'form':>7} {'grid':>9} {'iter/step':>9} {'passes':>6} {_HEAD} "
           f"{'first':>6} {'preload':>7}")
-    Ts = 0.9 * MU * W
     for label, half in (("steel/steel β=0", STEEL), ("steel/Al β≠0", ALUMINIUM)):
         for form in ("scalar", "vector"):
             for n in grids:
                 if form == "vector" and n > 128:
                     continue
-                sc = _scene(halfspace=dict(half), friction={"mu": MU},
-                            load={"time": [0.0, 0.2, 0.6, 1.0], "normal_force": W,
-                                  "tangential_force": [0.0, Ts, -Ts, Ts]},
-                            grid={"points": [n, n], "size": [3 * A_HERTZ] * 2},
-                            time={"steps": steps},
-                            solver={"fft": backend, "threads": threads})
-                pair = _floor_ms(n, backend, threads)[0]
+                sc = fretting_scene(half, n, steps, backend, threads)
+                pair = floor_ms(n, backend, threads)[0]
                 ds, run_s, ms, load = timed_run(sc, form, tuning)
-                pair = min(pair, _floor_ms(n, backend, threads)[0])
+                pair = min(pair, floor_ms(n, backend, threads)[0])
                 r = dict(case="fretting", pair=label, form=form, grid=n,
                          steps=ds.sizes["time"] - 1,
                          tolerance=float(sc.solver.tolerance),
@@ -260,12 +211,12 @@ def bench_memory(backend, threads, n=64, steps=1000):
           f"{f'ms/step (steps {steps - 10}-{steps})':>25}")
     for creep in ({"creep": "maxwell", "relaxation_time": 1.0},
                   {"creep": "prony", "terms": [[0.5, 0.1], [1.0, 1.0]], "relaxation_time": 2.0}):
-        sc = _scene(indenter={"material": "rigid"},
-                    halfspace={"material": "viscoelastic", "young": 105e9, "poisson": 0.5,
-                               **creep},
-                    load={"time": [0.0, 2.0], "normal_force": W},
-                    grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
-                    solver={"fft": backend, "threads": threads})
+        sc = make_scene(indenter={"material": "rigid"},
+                        halfspace={"material": "viscoelastic", "young": 105e9, "poisson": 0.5,
+                                   **creep},
+                        load={"time": [0.0, 2.0], "normal_force": W},
+                        grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
+                        solver={"fft": backend, "threads": threads})
         stamps = []
         simulate(sc, on_step=lambda k, t, rec, out=stamps: out.append(time.perf_counter()))
         d = np.diff(stamps) * 1e3
@@ -278,7 +229,6 @@ def bench_memory(backend, threads, n=64, steps=1000):
 
 def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",), tuning=None):
     rows = []
-    Ts = 0.9 * MU * W
     print(f"paper figure 3: rigid sphere on Maxwell (glassy E = 105 GPa, ν = 0.3: the steel "
           f"pair's composite modulus; coupling on), τ = t', {n}², {steps} steps, "
           f"{threads} FFT thread{'s' if threads > 1 else ''}; per step after the first "
@@ -286,17 +236,10 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",), tuni
     print(f"{'form':>7} {'iter/step':>9} {'passes':>6} {_HEAD} {'first':>6} {'preload':>7} "
           f"{'run s':>7} {'run pairs':>9}")
     for form in forms:
-        sc = _scene(indenter={"material": "rigid"},
-                    halfspace={"material": "viscoelastic", "young": 105e9, "poisson": NU,
-                               "creep": "maxwell", "relaxation_time": 1.0},
-                    friction={"mu": MU},
-                    load={"time": [0.0, 0.2, 0.6, 1.0], "normal_force": W,
-                          "tangential_force": [0.0, Ts, -Ts, Ts]},
-                    grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
-                    solver={"fft": backend, "threads": threads})
-        pair = _floor_ms(n, backend, threads)[0]
+        sc = paper_fig3_scene(n, steps, backend, threads)
+        pair = floor_ms(n, backend, threads)[0]
         ds, run_s, ms, load = timed_run(sc, form, tuning)
-        pair = min(pair, _floor_ms(n, backend, threads)[0])
+        pair = min(pair, floor_ms(n, backend, threads)[0])
         r = dict(case="paper-fig3", pair="rigid/Maxwell", form=form, grid=n,
                  steps=ds.sizes["time"] - 1,
                  tolerance=float(sc.solver.tolerance), **_step_figures(ds, ms, pair),
@@ -326,12 +269,12 @@ def _file_run(scene, form, tuning) -> float:
 
 def bench_long_run(backend, threads, n=256, steps=2000):
     from ...simulation import simulate  # the solver and the FFTs: only when a case runs
-    sc = _scene(indenter={"material": "rigid"},
-                halfspace={"material": "viscoelastic", "young": E_STEEL, "poisson": 0.5,
-                           "creep": "maxwell", "relaxation_time": 1.0},
-                load={"time": [0.0, 1.0], "normal_force": W},
-                grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
-                solver={"fft": backend, "threads": threads})
+    sc = make_scene(indenter={"material": "rigid"},
+                    halfspace={"material": "viscoelastic", "young": E_STEEL, "poisson": 0.5,
+                               "creep": "maxwell", "relaxation_time": 1.0},
+                    load={"time": [0.0, 1.0], "normal_force": W},
+                    grid={"points": [n, n], "size": "auto"}, time={"steps": steps},
+                    solver={"fft": backend, "threads": threads})
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         simulate(sc, os.path.join(tmp, "long.nc"))
@@ -345,7 +288,8 @@ def bench_long_run(backend, threads, n=256, steps=2000):
 
 
 CASES = {"normal": bench_normal, "fretting": bench_fretting, "memory": bench_memory,
-         "paper-fig3": bench_paper_fig3, "long-run": bench_long_run, "wear": bench_wear}
+         "paper-fig3": bench_paper_fig3, "long-run": bench_long_run, "wear": bench_wear,
+         "phases": bench_phases}
 
 
 # ----------------------------------------------------------------------------- the table
@@ -385,8 +329,8 @@ def table_rows(records, date=None, commit=None) -> list:
     commit = commit or _commit()
     meta = dict(date=date, commit=commit, cpus=os.cpu_count() or "")
     return [{c: _cell({**r, **meta}.get(c, ""))
-             for c in (WEAR_COLUMNS if r["case"] == "wear" else COLUMNS)}
-            for r in records if r["case"] in TABLE_CASES]
+             for c in OWN_COLUMNS.get(r.get("table", r["case"]), COLUMNS)}
+            for r in records if r.get("table", r["case"]) in TABLE_CASES]
 
 
 def write_table(rows, path) -> pathlib.Path:
@@ -405,7 +349,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("cases", nargs="*", default=["normal"],
                         help=f"which figures to print: {', '.join(CASES)} (default: normal)")
     parser.add_argument("--grids", type=int, nargs="+", default=None,
-                        help="grid sizes (cells per side; paper-fig3 takes the first)")
+                        help="grid sizes (cells per side; paper-fig3 takes the first, "
+                             "phases the first and the last)")
     parser.add_argument("--steps", type=int, default=None,
                         help="steps of the fretting loop and of paper-fig3 (default 40, 200)")
     parser.add_argument("--quick", action="store_true",
@@ -436,6 +381,13 @@ def _run_case(case, args, tuning=None):
         if steps:
             kw["steps"] = steps
         return bench_wear(args.fft, args.threads, **kw)
+    if case == "phases":
+        kw = dict(QUICK_PHASES) if args.quick else {}
+        if grids:
+            kw["grids"] = (grids[0], grids[-1])
+        if steps:
+            kw["steps"] = steps
+        return bench_phases(args.fft, args.threads, **kw)
     if args.quick:
         grids, steps = grids or QUICK["grids"], steps or QUICK["steps"]
     if case == "normal":
@@ -467,9 +419,10 @@ def main(args) -> int:
         tuning = tuning_from(args.tuning) if args.tuning else None
     except ValueError as e:
         raise SceneError(f"bench --{e}") from None
-    if args.csv is not None and "wear" in args.cases and len(set(args.cases)) > 1:
-        raise SceneError("bench --csv with wear and other cases: the wear table has its own "
-                         "columns; run wear alone")
+    for own in OWN_COLUMNS:
+        if args.csv is not None and own in args.cases and len(set(args.cases)) > 1:
+            raise SceneError(f"bench --csv with {own} and other cases: the {own} table has "
+                             f"its own columns; run {own} alone")
     csv_path = None if args.csv is None else check_output_path(args.csv, "table (--csv)")
     date = f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%dT%H:%MZ}"
     tables = []
