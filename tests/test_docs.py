@@ -306,3 +306,25 @@ def test_documents_cite_only_files_in_the_repository():
                 if (doc.parent / target).resolve().relative_to(ROOT).as_posix() not in _OUTPUTS:
                     missing.append(f"{doc.relative_to(ROOT)}: link to {target}")
     assert not missing, "documents cite files not in the repository:\n" + "\n".join(missing)
+
+
+def test_readme_phase_table_is_the_results_file_rounded():
+    """The README's table of where a step goes ("Where the rest of a step goes") shows
+    benchmarks/results/bench-phases.csv: each figure is the file's, rounded as printed
+    (half a unit of its last digit), and the date and commit it names are the file's."""
+    _, rows = _csv(RESULTS / "bench-phases.csv")
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text.split("Where the rest of a step goes")[1].split("\n\n* ")[0]
+    assert f"on {rows[0]['date'][:10]} at commit {rows[0]['commit']}" in section
+    lines = [ln for ln in section.splitlines() if ln.startswith("| ") and "---" not in ln]
+    columns = ("floor_ms_per_step", "transforms_ms_per_step", "filters_ms_per_step",
+               "products_ms_per_step", "inners_ms_per_step", "rest_ms_per_step",
+               "ms_per_step", "wall_over_floor", "spectral_over_floor")
+    assert len(lines) == 1 + len(rows)                        # a header and a row each
+    for line, row in zip(lines[1:], rows, strict=True):
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert cells[1] == f"{row['grid']}²", (cells, row)
+        for shown, column in zip(cells[2:], columns, strict=True):
+            decimals = len(shown.split(".")[1]) if "." in shown else 0
+            assert abs(float(shown) - float(row[column])) <= 0.5 * 10.0 ** -decimals + 1e-12, (
+                column, shown, row[column])
