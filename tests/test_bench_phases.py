@@ -17,14 +17,23 @@ PHASES = ("transforms", "filters", "products", "inners")
 needs_pyfftw = pytest.mark.skipif(not HAVE_PYFFTW, reason="the phases are timed in pyFFTW")
 
 
-@needs_pyfftw
-def test_phase_table_is_written_whole_and_consistent(tmp_path, capsys):
-    out = tmp_path / "bench-phases.csv"
-    assert cli.main(["bench", "phases", "--quick", "--csv", str(out)]) == 0
-    assert f"wrote {out}" in capsys.readouterr().out
+def _table(folder, *options):
+    """(header, rows) of ``contactpipe bench phases --quick`` with ``options``."""
+    out = folder / "bench-phases.csv"
+    assert cli.main(["bench", "phases", "--quick", "--csv", str(out), *options]) == 0
     with open(out, newline="", encoding="utf-8") as f:
         reader = csv.DictReader(f)
-        header, rows = reader.fieldnames, list(reader)
+        return reader.fieldnames, list(reader)
+
+
+@pytest.fixture(scope="module")
+def quick_table(tmp_path_factory):
+    return _table(tmp_path_factory.mktemp("phases"))
+
+
+@needs_pyfftw
+def test_phase_table_is_written_whole_and_consistent(quick_table):
+    header, rows = quick_table
     assert tuple(header) == bench_phases.PHASE_COLUMNS
     assert [(r["case"], r["pair"], r["form"]) for r in rows] == [
         ("fretting", "steel/Al", "scalar"), ("fretting", "steel/Al", "scalar"),
@@ -48,6 +57,20 @@ def test_phase_table_is_written_whole_and_consistent(tmp_path, capsys):
                                  "floor_ms_per_step"),
                                 ("wall_over_spectral", "ms_per_step", "spectral_ms_per_step")):
             assert v[ratio] == pytest.approx(v[num] / v[den], rel=1e-4), (r, ratio)
+
+
+@needs_pyfftw
+def test_tuning_reaches_the_phase_runs(quick_table, tmp_path):
+    """--tuning halves=false: the one-component joint solves apply their operator whole,
+    so they take more FFT pairs and no Parseval inner; the vector form, whose operator is
+    always applied in halves, is unchanged in pairs."""
+    _, rows = _table(tmp_path, "--tuning", "halves=false")
+    for default, whole in zip(quick_table[1], rows, strict=True):
+        pairs = float(default["pairs_per_step"]), float(whole["pairs_per_step"])
+        if whole["form"] == "scalar":
+            assert pairs[1] > pairs[0] and float(whole["inners_ms_per_step"]) == 0.0, whole
+        else:
+            assert pairs[1] == pairs[0] and float(whole["inners_ms_per_step"]) > 0.0, whole
 
 
 @needs_pyfftw

@@ -40,10 +40,10 @@ phases      where a step's time goes: the spectral work (transforms, filters, ke
             fretting steel/Al scalar 128² and 256², vector 128², steel/steel vector 128² and
             paper-fig3 (:mod:`contactpipe.pipeline.cli.bench_phases`)
 
-``--tuning NAME=VALUE ...`` runs ``fretting`` and ``paper-fig3`` with solver switches
-or constants changed from their defaults (:class:`contactpipe.solver.options.Tuning`,
-e.g. ``joint=false`` or ``defer=0``): the FFT pairs are deterministic, so the pair
-columns of two runs show what a feature saves.
+``--tuning NAME=VALUE ...`` runs ``fretting``, ``paper-fig3`` and ``phases`` with solver
+switches or constants changed from their defaults
+(:class:`contactpipe.solver.options.Tuning`, e.g. ``joint=false`` or ``defer=0``): the FFT
+pairs are deterministic, so the pair columns of two runs show what a feature saves.
 
 The table
 ---------
@@ -367,7 +367,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--vector", action="store_true",
                         help="paper-fig3: also time the vector tangential form (slow)")
     parser.add_argument("--tuning", nargs="+", default=[], metavar="NAME=VALUE",
-                        help="fretting, paper-fig3: solver switches and constants changed "
+                        help="fretting, paper-fig3, phases: solver switches and constants changed "
                              "from their defaults, e.g. joint=false defer=0 (the names: "
                              "contactpipe.solver.options.Tuning)")
 
@@ -387,7 +387,7 @@ def _run_case(case, args, tuning=None):
             kw["grids"] = (grids[0], grids[-1])
         if steps:
             kw["steps"] = steps
-        return bench_phases(args.fft, args.threads, **kw)
+        return bench_phases(args.fft, args.threads, tuning=tuning, **kw)
     if args.quick:
         grids, steps = grids or QUICK["grids"], steps or QUICK["steps"]
     if case == "normal":

@@ -82,9 +82,9 @@ def _seconds(stats, functions) -> float:
     return sum(v[3] for k, v in stats.stats.items() if k in keys)
 
 
-def _profiled(scene, form):
-    """(spectral seconds a step by phase, steps) of ``scene`` run under cProfile from the
-    end of its first instant."""
+def _profiled(scene, form, tuning):
+    """{phase: spectral seconds a step} of ``scene`` run under cProfile from the end of its
+    first instant."""
     from ...simulation import simulate
     prof, marks = cProfile.Profile(builtins=False), []
 
@@ -93,7 +93,8 @@ def _profiled(scene, form):
             prof.enable()
         marks.append(k)
     try:
-        simulate(scene, tangential=form, on_step=on_step)
+        kw = {} if tuning is None else {"tuning": tuning}
+        simulate(scene, tangential=form, on_step=on_step, **kw)
     finally:
         prof.disable()
     stats = pstats.Stats(prof)
@@ -122,10 +123,11 @@ def _cases(grids, steps):
              lambda b, t: paper_fig3_scene(small, fig3_steps, b, t))]
 
 
-def bench_phases(backend, threads, grids=(128, 256), steps=None):
+def bench_phases(backend, threads, grids=(128, 256), steps=None, tuning=None):
     """Print and return the phase split of a step (module doc) for the five cases,
     ``grids`` = (the 128² cases' grid, the 256² case's grid); ``steps`` None: 40 for
-    fretting, 200 for paper-fig3."""
+    fretting, 200 for paper-fig3; ``tuning``: the solver core's switches
+    (:class:`contactpipe.solver.options.Tuning`; None: the defaults)."""
     from ...solver.convolution import HAVE_PYFFTW
     if backend == "scipy" or not HAVE_PYFFTW:
         raise SceneError(f"bench phases --fft {backend}: the transforms are timed in "
@@ -138,10 +140,10 @@ def bench_phases(backend, threads, grids=(128, 256), steps=None):
     rows = []
     for case, pair, form, n, make in _cases(grids, steps):
         scene = make(backend, threads)
-        timed_run(scene, form)                      # plans, spectra, wisdom
+        timed_run(scene, form, tuning)              # plans, spectra, wisdom
         pair_ms = floor_ms(n, backend, threads)[0]
-        ds, _, ms, load = timed_run(scene, form)
-        split = {k: v * 1e3 for k, v in _profiled(scene, form).items()}
+        ds, _, ms, load = timed_run(scene, form, tuning)
+        split = {k: v * 1e3 for k, v in _profiled(scene, form, tuning).items()}
         pair_ms = min(pair_ms, floor_ms(n, backend, threads)[0])
         pairs = float(ds.fft_pairs.values[1:].mean())
         floor, spectral = pairs * pair_ms, sum(split.values())
