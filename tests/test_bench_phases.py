@@ -106,3 +106,16 @@ def test_phases_refuse_scipy_and_other_cases_in_one_table(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "run phases alone" in err
     assert not out.exists()
+
+
+@needs_pyfftw
+def test_phases_refuse_to_run_beside_another_profiler(monkeypatch, capsys):
+    """Where cProfile cannot start (Python 3.12+ refuses a second profiler, e.g. coverage's
+    sys.monitoring core): refused, exit 2, one line saying so, before any profiled run."""
+    class Busy(cProfile.Profile):
+        def enable(self, *a, **k):
+            raise ValueError("Another profiling tool is already active")
+    monkeypatch.setattr(bench_phases.cProfile, "Profile", Busy)
+    assert cli.main(["bench", "phases", "--quick"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "another profiler" in err, err

@@ -87,6 +87,12 @@ def _profiled(scene, form, tuning):
     first instant."""
     from ...simulation import simulate
     prof, marks = cProfile.Profile(builtins=False), []
+    try:                                # Python 3.12+: one profiler at a time
+        prof.enable()
+        prof.disable()
+    except ValueError as e:
+        raise SceneError(f"bench phases: cProfile cannot run here ({e}); run it without "
+                         "another profiler") from None
 
     def on_step(k, t, record):
         if not marks:
