@@ -1,7 +1,8 @@
-"""The scenes and clocks of ``contactpipe bench``'s cases, shared by
-:mod:`.bench` and :mod:`.bench_phases`: the bodies (a steel sphere, R = 18 mm, W = 1 kN,
-μ = 0.1), the fretting and paper-fig3 scenes, the time of one FFT pair (the floor's unit)
-and a run timed step by step.
+"""The scenes and clocks of ``contactpipe bench``'s cases, shared by :mod:`.bench`,
+:mod:`.bench_phases` and :mod:`.bench_wear`: the bodies (a steel sphere, R = 18 mm, on
+steel or aluminium, W = 1 kN; μ = 0.1 but in ``wear``), the fretting and paper-fig3
+scenes, the time of one FFT pair (the floor's unit), the load average and a run timed
+step by step.
 """
 from __future__ import annotations
 

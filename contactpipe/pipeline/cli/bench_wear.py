@@ -21,7 +21,6 @@ wear`` writes them to ``benchmarks/results/bench-wear.csv`` with the columns of
 from __future__ import annotations
 
 import math
-import os
 import pathlib
 import tempfile
 import time
@@ -29,10 +28,11 @@ import time
 import numpy as np
 
 from ...scene import Scene
+from .bench_scenes import A_HERTZ, W, load_average, make_scene
 
 __all__ = ["bench_wear", "wear_scene", "WEAR_COLUMNS", "QUICK_WEAR"]
 
-E_STEEL, NU, R, W, MU = 210e9, 0.3, 0.018, 1000.0, 0.3
+MU = 0.3            # the bodies, R and W are those of the other cases (bench_scenes)
 T_STAR = 0.5 * MU * W
 K_ARCHARD = 1e-14
 #: The columns of bench-wear.csv: what was run, the figures, where and when.
@@ -44,29 +44,23 @@ WEAR_COLUMNS = ("case", "run", "grid", "steps", "cycles", "jump", "coefficient",
 QUICK_WEAR = dict(n=16, steps=8, cycles=1000, check_cycles=30)
 
 
-def _load() -> float:
-    return os.getloadavg()[0] if hasattr(os, "getloadavg") else math.nan
-
-
 def wear_scene(n, steps, cycles, jump, coefficient, backend="auto", threads=1) -> Scene:
     """The bench's scene: steel on steel, Archard wear, force-controlled partial slip."""
-    a = (3 * W * R / (4 / (2 * (1 - NU ** 2) / E_STEEL))) ** (1 / 3)
-    steel = {"material": "elastic", "young": E_STEEL, "poisson": NU}
-    return Scene(name="bench-wear", geometry={"shape": "sphere", "radius": R},
-                 indenter=dict(steel), halfspace=dict(steel), friction={"mu": MU},
-                 load={"time": [0.0, 0.25, 0.5, 0.75, 1.0], "normal_force": W,
-                       "tangential_force": [0.0, T_STAR, 0.0, -T_STAR, 0.0]},
-                 grid={"points": [n, n], "size": [3 * a, 3 * a]}, time={"steps": steps},
-                 wear={"law": "archard", "coefficient": coefficient, "cycles": cycles,
-                       "jump": jump},
-                 solver={"fft": backend, "threads": threads})
+    return make_scene(name="bench-wear", friction={"mu": MU},
+                      load={"time": [0.0, 0.25, 0.5, 0.75, 1.0], "normal_force": W,
+                            "tangential_force": [0.0, T_STAR, 0.0, -T_STAR, 0.0]},
+                      grid={"points": [n, n], "size": [3 * A_HERTZ] * 2},
+                      time={"steps": steps},
+                      wear={"law": "archard", "coefficient": coefficient, "cycles": cycles,
+                            "jump": jump},
+                      solver={"fft": backend, "threads": threads})
 
 
 def _run(scene, folder: pathlib.Path, name: str):
     """(final wear depth, worn volume, cycles simulated, wall [s], load) of a run written
     to ``folder``."""
     from ...simulation import simulate  # the solver and the FFTs: only when a case runs
-    load = _load()
+    load = load_average()
     t0 = time.perf_counter()
     ds = simulate(scene, folder / f"{name}.nc")
     wall = time.perf_counter() - t0
@@ -74,7 +68,7 @@ def _run(scene, folder: pathlib.Path, name: str):
         depth = np.asarray(ds["wear_depth"].isel(cycle=-1).values, float)
         volume = float(ds["worn_volume"].values[-1])
         simulated = int(ds.attrs["cycles_simulated"])
-    return depth, volume, simulated, wall, max(load, _load())
+    return depth, volume, simulated, wall, max(load, load_average())
 
 
 def _record(run, n, steps, cycles, jump, k, result, **extra) -> dict:
