@@ -334,9 +334,11 @@ def _cycles(pb, st, step, record_of, first, on_step, bar, ckpt, every, start):
         n, simulated = cycle, simulated + 1
         if loop:
             hist.keep(cycle, records)
-        size = 1 if cycle == total else \
-            jumps.choose(pb.wear.depth.sum(axis=0) - before["depth"].sum(axis=0),
-                         pb.wear.depth.sum(axis=0), cycle)
+        if cycle == total:
+            size = 1
+        else:
+            depth = pb.wear.depth.sum(axis=0)       # both bodies' depths, summed once
+            size = jumps.choose(depth - before["depth"].sum(axis=0), depth, cycle)
         size = 1 if cycle == 1 else min(size, total - cycle)   # the first: a start-up
         if cycle in marks or size > 1 or cycle == total:
             hist.add(cycle, pb.wear.total, st.dissipation, p_max, stick_min)
