@@ -62,6 +62,18 @@ FULL = dict(normal=[64, 128, 256, 512], fretting=[64, 128, 256], fretting_steps=
 QUICK = dict(normal=[16], fretting=[16], fretting_steps=10, fig3=(16, 10), memory=(16, 25))
 
 
+def _archived(scene):
+    """(seconds, FFT pairs with the preload estimate's) of ``scene`` streamed to an
+    archive in a temporary folder."""
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        with simulate(scene, pathlib.Path(tmp) / "fig3.nc") as ds:
+            wall = time.perf_counter() - t0
+            pairs = int(ds.fft_pairs.values.sum()
+                        + ds.attrs.get("preload_estimate_fft_pairs", 0))
+    return wall, pairs
+
+
 def fig3_study(n, steps):
     """The two runs of studies/fig3_maxwell.py (its scenes, its archives streamed to disk),
     each timed: records like bench's."""
@@ -73,14 +85,7 @@ def fig3_study(n, steps):
         scene = c.maxwell_fretting_scene(n=n, steps=steps, window=ratio * c.RELAXATION_TIME,
                                          name=f"fig3-maxwell-tau{ratio:g}",
                                          preload=study.PRELOAD[0])
-        floor = bench.floor_ms(n, "auto", 1)[0]
-        with tempfile.TemporaryDirectory() as tmp:
-            t0 = time.perf_counter()
-            with simulate(scene, pathlib.Path(tmp) / "fig3.nc") as ds:
-                wall = time.perf_counter() - t0
-                pairs = int(ds.fft_pairs.values.sum()
-                            + ds.attrs.get("preload_estimate_fft_pairs", 0))
-        floor = min(floor, bench.floor_ms(n, "auto", 1)[0])
+        (wall, pairs), floor = bench.pair_ms_around(n, "auto", 1, _archived, scene)
         print(f"  tau = {ratio:g} t': {wall:.1f} s ({pairs:,} FFT pairs, one pair {floor:.3f} "
               f"ms, wall / floor {wall * 1e3 / (pairs * floor):.1f})")
         rows.append(dict(case="fig3-study", pair="rigid/Maxwell", form=f"tau={ratio:g}t'",

@@ -90,6 +90,7 @@ from .bench_scenes import (
     fretting_scene,
     load_average,
     make_scene,
+    pair_ms_around,
     paper_fig3_scene,
     timed_run,
 )
@@ -97,7 +98,7 @@ from .bench_wear import QUICK_WEAR, WEAR_COLUMNS, bench_wear
 
 __all__ = ["add_arguments", "main", "CASES", "COLUMNS", "TABLE_CASES", "timed_run",
            "table_rows", "write_table", "default_table_path", "fretting_scene",
-           "paper_fig3_scene", "floor_ms"]
+           "paper_fig3_scene", "floor_ms", "pair_ms_around"]
 
 #: The columns of the CSV table, in order: what was run (case, the bodies, grid N for
 #: N x N cells, steps after the first instant, solver tolerance, tangential form), the
@@ -116,6 +117,13 @@ OWN_COLUMNS = {"wear": WEAR_COLUMNS, "phases": PHASE_COLUMNS}
 #: ``--quick``: a smoke run of seconds.
 QUICK = dict(grids=[16], steps=5, memory=(16, 25), long_run=(16, 20))
 _ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+def _timed(run, *args):
+    """(``run(*args)``, its wall time [ms])."""
+    t0 = time.perf_counter()
+    out = run(*args)
+    return out, (time.perf_counter() - t0) * 1e3
 
 
 def _figures(pairs_per_step, ms_per_step, pair_ms):
@@ -159,11 +167,7 @@ def bench_normal(grids, backend, threads):
         t0 = time.perf_counter()
         simulate(sc)                                  # plans and kernel spectra (cached)
         first = time.perf_counter() - t0
-        pair = floor_ms(n, backend, threads)[0]
-        t0 = time.perf_counter()
-        ds = simulate(sc)
-        wall = (time.perf_counter() - t0) * 1e3
-        pair = min(pair, floor_ms(n, backend, threads)[0])
+        (ds, wall), pair = pair_ms_around(n, backend, threads, _timed, simulate, sc)
         pairs = float(ds.fft_pairs.values[0])
         r = dict(case="normal", pair="steel/steel", form="normal", grid=n, steps=0,
                  tolerance=1e-10, iterations_per_step=int(ds.iterations[0]),
@@ -188,9 +192,8 @@ def bench_fretting(grids, backend, threads, steps=40, tuning=None):
                 if form == "vector" and n > 128:
                     continue
                 sc = fretting_scene(half, n, steps, backend, threads)
-                pair = floor_ms(n, backend, threads)[0]
-                ds, run_s, ms, load = timed_run(sc, form, tuning)
-                pair = min(pair, floor_ms(n, backend, threads)[0])
+                (ds, run_s, ms, load), pair = pair_ms_around(
+                    n, backend, threads, timed_run, sc, form, tuning)
                 r = dict(case="fretting", pair=label, form=form, grid=n,
                          steps=ds.sizes["time"] - 1,
                          tolerance=float(sc.solver.tolerance),
@@ -237,9 +240,8 @@ def bench_paper_fig3(backend, threads, steps=200, n=128, forms=("scalar",), tuni
           f"{'run s':>7} {'run pairs':>9}")
     for form in forms:
         sc = paper_fig3_scene(n, steps, backend, threads)
-        pair = floor_ms(n, backend, threads)[0]
-        ds, run_s, ms, load = timed_run(sc, form, tuning)
-        pair = min(pair, floor_ms(n, backend, threads)[0])
+        (ds, run_s, ms, load), pair = pair_ms_around(
+            n, backend, threads, timed_run, sc, form, tuning)
         r = dict(case="paper-fig3", pair="rigid/Maxwell", form=form, grid=n,
                  steps=ds.sizes["time"] - 1,
                  tolerance=float(sc.solver.tolerance), **_step_figures(ds, ms, pair),

@@ -40,9 +40,9 @@ from ...exceptions import SceneError
 from .bench_scenes import (
     ALUMINIUM,
     STEEL,
-    floor_ms,
     fretting_scene,
     load_average,
+    pair_ms_around,
     paper_fig3_scene,
     timed_run,
 )
@@ -112,6 +112,13 @@ def _profiled(scene, form, tuning):
             "inners": _seconds(stats, f["inners"]) / steps}
 
 
+def _both(scene, form, tuning):
+    """(:func:`.bench_scenes.timed_run`'s plain run, :func:`_profiled`'s split [ms a
+    step]) of ``scene``."""
+    plain = timed_run(scene, form, tuning)
+    return plain, {k: v * 1e3 for k, v in _profiled(scene, form, tuning).items()}
+
+
 def _cases(grids, steps):
     """(label, bodies, form, grid, scene maker) of the five cases."""
     small, large = grids
@@ -147,10 +154,8 @@ def bench_phases(backend, threads, grids=(128, 256), steps=None, tuning=None):
     for case, pair, form, n, make in _cases(grids, steps):
         scene = make(backend, threads)
         timed_run(scene, form, tuning)              # plans, spectra, wisdom
-        pair_ms = floor_ms(n, backend, threads)[0]
-        ds, _, ms, load = timed_run(scene, form, tuning)
-        split = {k: v * 1e3 for k, v in _profiled(scene, form, tuning).items()}
-        pair_ms = min(pair_ms, floor_ms(n, backend, threads)[0])
+        ((ds, _, ms, load), split), pair_ms = pair_ms_around(
+            n, backend, threads, _both, scene, form, tuning)
         pairs = float(ds.fft_pairs.values[1:].mean())
         floor, spectral = pairs * pair_ms, sum(split.values())
         r = dict(table="phases", case=case, pair=pair, grid=n, steps=ds.sizes["time"] - 1,
